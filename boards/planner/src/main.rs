@@ -1,0 +1,24 @@
+//! The planner board image: runtime entry and the main loop over volatile MMIO.
+#![no_std]
+#![no_main]
+
+use board_planner::Board;
+use regs::MmioIo;
+use vme_map::bus::MmioGlobal;
+
+rt::entry!(vme_map::BoardId::Planner, main, safe_stop);
+
+fn main() -> ! {
+    // SAFETY: this image runs on a board that maps global RAM and its private I/O.
+    let (mut g, mut io) = unsafe { (MmioGlobal::new(), MmioIo::new()) };
+    let mut board = Board::new();
+    board.boot(&mut g, &mut io);
+    loop {
+        board.poll(&mut g, &mut io);
+    }
+}
+
+fn safe_stop() {
+    // SAFETY: called by the runtime on this board, where the private I/O is mapped.
+    board_planner::safe(&mut unsafe { MmioIo::new() });
+}

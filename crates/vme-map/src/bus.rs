@@ -1,0 +1,123 @@
+//! Access to global RAM: the [`GlobalBus`] trait and its implementations.
+//!
+//! Boards never hold Rust references into global RAM; they read and write aligned words at
+//! offsets through this trait, so the same board code runs on the 68020 (volatile MMIO),
+//! in unit tests ([`ArrayBus`]) and in the simulator's native mode.
+
+/// Word and byte access to global RAM at byte offsets from [`crate::GLOBAL_RAM_BASE`].
+///
+/// Words are big-endian and 32-bit accesses must be 4-byte aligned; implementations may
+/// panic on a misaligned offset (it is a programming error, never a data error).
+pub trait GlobalBus {
+    /// Reads the aligned 32-bit word at `off`.
+    fn read_u32(&mut self, off: u32) -> u32;
+    /// Writes the aligned 32-bit word at `off`.
+    fn write_u32(&mut self, off: u32, val: u32);
+    /// Reads the byte at `off`.
+    fn read_u8(&mut self, off: u32) -> u8;
+    /// Writes the byte at `off`.
+    fn write_u8(&mut self, off: u32, val: u8);
+    /// Atomically replaces the word at `off` with `new` if it equals `current` (the 68020's
+    /// `CAS.L`, an indivisible read-modify-write cycle on the VME bus). Returns the value
+    /// found, so the swap happened exactly when the result equals `current`.
+    fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32;
+}
+
+/// Global RAM backed by a byte slice, for unit tests and the host simulator.
+///
+/// The slice may be shorter than 8 MiB; accesses beyond it panic.
+pub struct ArrayBus<'a> {
+    mem: &'a mut [u8],
+}
+
+impl<'a> ArrayBus<'a> {
+    /// Wraps `mem` as global RAM starting at offset 0.
+    pub fn new(mem: &'a mut [u8]) -> Self {
+        Self { mem }
+    }
+}
+
+impl GlobalBus for ArrayBus<'_> {
+    fn read_u32(&mut self, off: u32) -> u32 {
+        debug_assert!(off % 4 == 0, "misaligned global RAM read at {off:#x}");
+        let o = off as usize;
+        u32::from_be_bytes([self.mem[o], self.mem[o + 1], self.mem[o + 2], self.mem[o + 3]])
+    }
+    fn write_u32(&mut self, off: u32, val: u32) {
+        debug_assert!(off % 4 == 0, "misaligned global RAM write at {off:#x}");
+        let o = off as usize;
+        self.mem[o..o + 4].copy_from_slice(&val.to_be_bytes());
+    }
+    fn read_u8(&mut self, off: u32) -> u8 {
+        self.mem[off as usize]
+    }
+    fn write_u8(&mut self, off: u32, val: u8) {
+        self.mem[off as usize] = val;
+    }
+    fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
+        let found = self.read_u32(off);
+        if found == current {
+            self.write_u32(off, new);
+        }
+        found
+    }
+}
+
+/// Global RAM through the board's VME window: volatile accesses at
+/// [`crate::GLOBAL_RAM_BASE`]` + off`. Only meaningful on the 68020 boards.
+#[cfg(target_arch = "m68k")]
+pub struct MmioGlobal(());
+
+#[cfg(target_arch = "m68k")]
+impl MmioGlobal {
+    /// Creates the accessor.
+    ///
+    /// # Safety
+    /// The caller must run on a board whose bus maps global RAM at [`crate::GLOBAL_RAM_BASE`].
+    pub const unsafe fn new() -> Self {
+        Self(())
+    }
+    #[inline(always)]
+    fn ptr<T>(off: u32) -> *mut T {
+        (crate::GLOBAL_RAM_BASE + off) as *mut T
+    }
+}
+
+#[cfg(target_arch = "m68k")]
+impl GlobalBus for MmioGlobal {
+    #[inline(always)]
+    fn read_u32(&mut self, off: u32) -> u32 {
+        // SAFETY: `new`'s contract: the window is mapped; offsets come from `layout`.
+        unsafe { core::ptr::read_volatile(Self::ptr::<u32>(off)) }
+    }
+    #[inline(always)]
+    fn write_u32(&mut self, off: u32, val: u32) {
+        // SAFETY: as above.
+        unsafe { core::ptr::write_volatile(Self::ptr::<u32>(off), val) }
+    }
+    #[inline(always)]
+    fn read_u8(&mut self, off: u32) -> u8 {
+        // SAFETY: as above.
+        unsafe { core::ptr::read_volatile(Self::ptr::<u8>(off)) }
+    }
+    #[inline(always)]
+    fn write_u8(&mut self, off: u32, val: u8) {
+        // SAFETY: as above.
+        unsafe { core::ptr::write_volatile(Self::ptr::<u8>(off), val) }
+    }
+    #[inline(always)]
+    fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
+        let mut dc = current;
+        // SAFETY: CAS.L on an aligned, mapped global RAM word; it only touches that word.
+        unsafe {
+            core::arch::asm!(
+                "cas.l {dc}, {du}, ({a})",
+                dc = inout(reg_data) dc,
+                du = in(reg_data) new,
+                a = in(reg_addr) Self::ptr::<u32>(off),
+                options(nostack),
+            );
+        }
+        dc
+    }
+}

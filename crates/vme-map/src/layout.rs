@@ -1,0 +1,266 @@
+//! Offsets of every region of global RAM, asserted at compile time (design.md section 4).
+//!
+//! Offsets are explicit numbers, as a hardware memory map is: moving a region is a
+//! deliberate change of [`LAYOUT_VERSION`]. The `const` assertions below fail the build if a
+//! region overlaps the next, is misaligned, or leaves global RAM. [`LAYOUT`] lists the regions
+//! for `docs/memory-map.md`; a test fails if the document and this table disagree.
+
+use crate::board::{BoardId, BoardState, FaultCode, FaultRecord, StatusWord};
+use crate::bus::GlobalBus;
+use crate::record::{Record, SeqLock};
+use crate::records::{
+    HostCommand, ObjectTable, PlannerGoal, ReflexSubgoal, ServoState, WorkEntry, WORK_ENTRIES,
+};
+use crate::GLOBAL_RAM_SIZE;
+
+/// Value of the header's magic word: ASCII "NW87" (Newman 1987).
+pub const MAGIC: u32 = 0x4E57_3837;
+/// Version of this layout; bumped by every incompatible change.
+pub const LAYOUT_VERSION: u32 = 1;
+
+/// Header: magic word (written by the host at power-up).
+pub const HEADER_MAGIC: u32 = 0x0000;
+/// Header: layout version (written by the host at power-up).
+pub const HEADER_VERSION: u32 = 0x0004;
+/// Header: bytes of global RAM in use (written by the host at power-up).
+pub const HEADER_SIZE: u32 = 0x0008;
+/// Header: host power-up counter (written by the host).
+pub const HEADER_BOOTS: u32 = 0x000C;
+/// Bytes reserved for the header.
+pub const HEADER_BYTES: u32 = 0x0100;
+
+/// First board slot.
+pub const BOARD_SLOTS: u32 = 0x0100;
+/// Bytes per board slot.
+pub const BOARD_SLOT_STRIDE: u32 = 0x0040;
+/// Number of board slots reserved (one spare beyond [`BoardId::COUNT`]).
+pub const BOARD_SLOT_COUNT: u32 = 8;
+
+/// The global RAM slot of one board: heartbeat, status word, fault record.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoardSlot {
+    base: u32,
+}
+
+impl BoardSlot {
+    /// The slot of `board`.
+    pub const fn of(board: BoardId) -> Self {
+        Self { base: BOARD_SLOTS + board.index() * BOARD_SLOT_STRIDE }
+    }
+    /// Offset of the heartbeat word: bumped once per main-loop pass.
+    pub const fn heartbeat(self) -> u32 {
+        self.base
+    }
+    /// Offset of the [`crate::StatusWord`].
+    pub const fn status(self) -> u32 {
+        self.base + 4
+    }
+    /// The fault record's sequence-locked slot.
+    pub const fn fault(self) -> SeqLock<FaultRecord> {
+        SeqLock::at(self.base + 8)
+    }
+
+    /// Advances the heartbeat by one and returns the new count. Only the slot's board calls it.
+    pub fn beat(self, bus: &mut dyn GlobalBus) -> u32 {
+        let hb = bus.read_u32(self.heartbeat()).wrapping_add(1);
+        bus.write_u32(self.heartbeat(), hb);
+        hb
+    }
+
+    /// Reads the status word.
+    pub fn status_word(self, bus: &mut dyn GlobalBus) -> StatusWord {
+        StatusWord(bus.read_u32(self.status()))
+    }
+
+    /// Sets the board's state, keeping its fault code and count.
+    pub fn set_state(self, bus: &mut dyn GlobalBus, state: BoardState) {
+        let w = bus.read_u32(self.status());
+        bus.write_u32(self.status(), (w & !0xFF) | state as u32);
+    }
+
+    /// Records a fault: the fault record first, then the status word with `state`, the fault
+    /// code and the incremented fault count, so a reader that sees the new status finds the
+    /// matching details.
+    pub fn record_fault(self, bus: &mut dyn GlobalBus, state: BoardState, rec: &FaultRecord) {
+        self.fault().publish(bus, rec);
+        let old = StatusWord(bus.read_u32(self.status()));
+        let code = FaultCode::from_u8(rec.code as u8).unwrap_or(FaultCode::UnexpectedException);
+        let w = StatusWord::new(state, code, old.faults().saturating_add(1));
+        bus.write_u32(self.status(), w.0);
+    }
+}
+
+/// Writes the header the host writes at power-up: magic, layout version, size in use.
+pub fn init_header(bus: &mut dyn GlobalBus) {
+    bus.write_u32(HEADER_VERSION, LAYOUT_VERSION);
+    bus.write_u32(HEADER_SIZE, LAYOUT_END);
+    let boots = bus.read_u32(HEADER_BOOTS);
+    bus.write_u32(HEADER_BOOTS, boots.wrapping_add(1));
+    bus.write_u32(HEADER_MAGIC, MAGIC);
+}
+
+/// Whether global RAM carries this layout's header: boards refuse to run on any other.
+pub fn header_ok(bus: &mut dyn GlobalBus) -> bool {
+    bus.read_u32(HEADER_MAGIC) == MAGIC && bus.read_u32(HEADER_VERSION) == LAYOUT_VERSION
+}
+
+/// Object position table (writer: sensing).
+pub const OBJECTS: SeqLock<ObjectTable> = SeqLock::at(0x0400);
+/// Servo state and arrest points (writer: servo).
+pub const SERVO_STATE: SeqLock<ServoState> = SeqLock::at(0x0580);
+/// Reflex subgoal for the servo (writer: reflex).
+pub const REFLEX_SUBGOAL: SeqLock<ReflexSubgoal> = SeqLock::at(0x05C0);
+/// Planner goal for the reflex (writer: planner).
+pub const PLANNER_GOAL: SeqLock<PlannerGoal> = SeqLock::at(0x0600);
+/// Host commands (writer: host).
+pub const HOST_COMMAND: SeqLock<HostCommand> = SeqLock::at(0x0640);
+
+/// C-space work list: generation word (writer: sensing, which queues jobs).
+pub const WORK_GENERATION: u32 = 0x0800;
+/// C-space work list: first entry (claim words: CAS by C-space boards).
+pub const WORK_LIST: u32 = 0x0810;
+/// Bytes per work-list entry.
+pub const WORK_ENTRY_BYTES: u32 = 4 * WorkEntry::WORDS;
+
+/// Offset of work-list entry `i`.
+pub const fn work_entry(i: u32) -> u32 {
+    WORK_LIST + i * WORK_ENTRY_BYTES
+}
+
+/// C-space map: 128 x 128 pixels of 4 edge-direction counter bytes (writers: C-space boards).
+pub const CSPACE_MAP: u32 = 0x0001_0000;
+/// Pixels per C-space axis (thesis ch. IV: ~0.05 rad per pixel).
+pub const CSPACE_SIDE: u32 = 128;
+/// Counter bytes per C-space pixel (one per edge direction).
+pub const CSPACE_COUNTERS: u32 = 4;
+/// Bytes of the C-space map.
+pub const CSPACE_MAP_BYTES: u32 = CSPACE_SIDE * CSPACE_SIDE * CSPACE_COUNTERS;
+
+/// Offset of the counter `dir` (0..4) of pixel (`i1`, `i2`), `i1` along theta1.
+pub const fn cspace_counter(i1: u32, i2: u32, dir: u32) -> u32 {
+    CSPACE_MAP + ((i2 % CSPACE_SIDE) * CSPACE_SIDE + (i1 % CSPACE_SIDE)) * CSPACE_COUNTERS + dir
+}
+
+/// First log ring.
+pub const LOG_RINGS: u32 = 0x0002_0000;
+/// Bytes per board's log ring.
+pub const LOG_RING_STRIDE: u32 = 0x1000;
+/// Entries per log ring.
+pub const LOG_ENTRIES: u32 = 64;
+/// Bytes per log entry.
+pub const LOG_ENTRY_BYTES: u32 = 32;
+/// Offset of the first entry within a ring (after the write-index word and padding).
+pub const LOG_ENTRIES_OFFSET: u32 = 16;
+
+/// Offset of `board`'s log ring.
+pub const fn log_ring(board: BoardId) -> u32 {
+    LOG_RINGS + board.index() * LOG_RING_STRIDE
+}
+
+/// End of the used part of global RAM; the rest is free for later records.
+pub const LAYOUT_END: u32 = LOG_RINGS + BOARD_SLOT_COUNT * LOG_RING_STRIDE;
+
+/// Who writes a region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Writer {
+    /// The host workstation.
+    Host,
+    /// Exactly one board.
+    Board(BoardId),
+    /// Each board its own part (board slots, log rings).
+    EachBoard,
+    /// The C-space boards, by atomic claim (work list) or owned job (map).
+    CspaceBoards,
+}
+
+/// One row of the memory map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Region {
+    /// Name used in `docs/memory-map.md`.
+    pub name: &'static str,
+    /// Byte offset from [`crate::GLOBAL_RAM_BASE`].
+    pub offset: u32,
+    /// Bytes.
+    pub size: u32,
+    /// Who writes it.
+    pub writer: Writer,
+    /// Whether it is published under a sequence lock.
+    pub seqlock: bool,
+}
+
+const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Region {
+    Region { name, offset: s.offset(), size: SeqLock::<R>::SIZE, writer, seqlock: true }
+}
+
+/// Every region of global RAM in address order.
+pub const LAYOUT: [Region; 10] = [
+    Region {
+        name: "header",
+        offset: HEADER_MAGIC,
+        size: HEADER_BYTES,
+        writer: Writer::Host,
+        seqlock: false,
+    },
+    Region {
+        name: "board_slots",
+        offset: BOARD_SLOTS,
+        size: BOARD_SLOT_COUNT * BOARD_SLOT_STRIDE,
+        writer: Writer::EachBoard,
+        seqlock: false,
+    },
+    seq("objects", OBJECTS, Writer::Board(BoardId::Sensing)),
+    seq("servo_state", SERVO_STATE, Writer::Board(BoardId::Servo)),
+    seq("reflex_subgoal", REFLEX_SUBGOAL, Writer::Board(BoardId::Reflex)),
+    seq("planner_goal", PLANNER_GOAL, Writer::Board(BoardId::Planner)),
+    seq("host_command", HOST_COMMAND, Writer::Host),
+    Region {
+        name: "work_list",
+        offset: WORK_GENERATION,
+        size: WORK_LIST - WORK_GENERATION + WORK_ENTRIES as u32 * WORK_ENTRY_BYTES,
+        writer: Writer::CspaceBoards,
+        seqlock: false,
+    },
+    Region {
+        name: "cspace_map",
+        offset: CSPACE_MAP,
+        size: CSPACE_MAP_BYTES,
+        writer: Writer::CspaceBoards,
+        seqlock: false,
+    },
+    Region {
+        name: "log_rings",
+        offset: LOG_RINGS,
+        size: BOARD_SLOT_COUNT * LOG_RING_STRIDE,
+        writer: Writer::EachBoard,
+        seqlock: false,
+    },
+];
+
+// ---- compile-time checks of the map ----
+
+const fn check_layout() {
+    let mut i = 0;
+    while i < LAYOUT.len() {
+        let r = LAYOUT[i];
+        assert!(r.offset % 4 == 0, "every region is word aligned");
+        assert!(r.offset + r.size <= GLOBAL_RAM_SIZE, "every region lies in global RAM");
+        if i + 1 < LAYOUT.len() {
+            assert!(r.offset + r.size <= LAYOUT[i + 1].offset, "regions do not overlap");
+        }
+        i += 1;
+    }
+}
+const _: () = check_layout();
+const _: () = assert!(BoardId::COUNT as u32 <= BOARD_SLOT_COUNT);
+// A board slot holds heartbeat, status and the fault record.
+const _: () = assert!(8 + SeqLock::<FaultRecord>::SIZE <= BOARD_SLOT_STRIDE);
+// The record sizes the offsets above were chosen for.
+const _: () = assert!(SeqLock::<ObjectTable>::SIZE == 136);
+const _: () = assert!(SeqLock::<ServoState>::SIZE == 44);
+const _: () = assert!(SeqLock::<ReflexSubgoal>::SIZE == 20);
+const _: () = assert!(SeqLock::<PlannerGoal>::SIZE == 24);
+const _: () = assert!(SeqLock::<HostCommand>::SIZE == 20);
+const _: () = assert!(WORK_ENTRY_BYTES == 32);
+const _: () = assert!(CSPACE_MAP_BYTES == 0x1_0000);
+const _: () = assert!(LOG_ENTRIES_OFFSET + LOG_ENTRIES * LOG_ENTRY_BYTES <= LOG_RING_STRIDE);
+const _: () = assert!(LAYOUT_END == LAYOUT[LAYOUT.len() - 1].offset + LAYOUT[LAYOUT.len() - 1].size);
