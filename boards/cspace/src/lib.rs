@@ -23,7 +23,9 @@ impl Board {
 
     /// A fresh board with identity `id` (see [`Board::identify`]).
     pub const fn new(id: BoardId) -> Self {
-        Self { shell: Shell::new(id) }
+        Self {
+            shell: Shell::new(id),
+        }
     }
 
     /// The board's identity.

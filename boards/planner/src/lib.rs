@@ -24,7 +24,9 @@ impl Default for Board {
 impl Board {
     /// A fresh board.
     pub const fn new() -> Self {
-        Self { shell: Shell::new(BoardId::Planner) }
+        Self {
+            shell: Shell::new(BoardId::Planner),
+        }
     }
 
     /// The board's identity.

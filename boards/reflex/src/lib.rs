@@ -24,7 +24,9 @@ impl Default for Board {
 impl Board {
     /// A fresh board.
     pub const fn new() -> Self {
-        Self { shell: Shell::new(BoardId::Reflex) }
+        Self {
+            shell: Shell::new(BoardId::Reflex),
+        }
     }
 
     /// The board's identity.

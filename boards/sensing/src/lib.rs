@@ -24,7 +24,9 @@ impl Default for Board {
 impl Board {
     /// A fresh board.
     pub const fn new() -> Self {
-        Self { shell: Shell::new(BoardId::Sensing) }
+        Self {
+            shell: Shell::new(BoardId::Sensing),
+        }
     }
 
     /// The board's identity.

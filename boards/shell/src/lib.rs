@@ -16,7 +16,9 @@ pub struct Shell {
 impl Shell {
     /// The shell of board `id`.
     pub const fn new(id: BoardId) -> Self {
-        Self { life: Lifecycle::new(id) }
+        Self {
+            life: Lifecycle::new(id),
+        }
     }
 
     /// The board's identity.
@@ -45,7 +47,7 @@ impl Shell {
                 let v = io.read16(regs::UNDECODED_PROBE);
                 core::hint::black_box(v);
             }
-            Some(HostAction::InjectPanic) => panic!("host-injected panic on {}", self.id().name()),
+            Some(HostAction::InjectPanic) => panic!("host-injected panic"),
             None => {}
         }
     }

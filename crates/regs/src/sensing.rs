@@ -35,15 +35,51 @@ pub const ADC_MAX: u16 = 4095;
 
 /// The sensing board's register table.
 pub const REGISTERS: [Register; 9] = [
-    Register { name: "BOARD_ID", offset: crate::BOARD_ID, access: Access::R },
-    Register { name: "LED_SELECT", offset: LED_SELECT, access: Access::W },
-    Register { name: "LED_CTRL", offset: LED_CTRL, access: Access::RW },
-    Register { name: "LED_CURRENT", offset: LED_CURRENT, access: Access::R },
-    Register { name: "ADC_CTRL", offset: ADC_CTRL, access: Access::W },
-    Register { name: "ADC_STATUS", offset: ADC_STATUS, access: Access::R },
-    Register { name: "ADC_X", offset: ADC_X, access: Access::R },
-    Register { name: "ADC_Y", offset: ADC_Y, access: Access::R },
-    Register { name: "ADC_SUM", offset: ADC_SUM, access: Access::R },
+    Register {
+        name: "BOARD_ID",
+        offset: crate::BOARD_ID,
+        access: Access::R,
+    },
+    Register {
+        name: "LED_SELECT",
+        offset: LED_SELECT,
+        access: Access::W,
+    },
+    Register {
+        name: "LED_CTRL",
+        offset: LED_CTRL,
+        access: Access::RW,
+    },
+    Register {
+        name: "LED_CURRENT",
+        offset: LED_CURRENT,
+        access: Access::R,
+    },
+    Register {
+        name: "ADC_CTRL",
+        offset: ADC_CTRL,
+        access: Access::W,
+    },
+    Register {
+        name: "ADC_STATUS",
+        offset: ADC_STATUS,
+        access: Access::R,
+    },
+    Register {
+        name: "ADC_X",
+        offset: ADC_X,
+        access: Access::R,
+    },
+    Register {
+        name: "ADC_Y",
+        offset: ADC_Y,
+        access: Access::R,
+    },
+    Register {
+        name: "ADC_SUM",
+        offset: ADC_SUM,
+        access: Access::R,
+    },
 ];
 
 bitflags! {
@@ -111,7 +147,11 @@ impl<B: IoBus> SensingIo<B> {
     /// Selects beacon `n` (0..=7) and turns its LED on or off.
     pub fn strobe(&mut self, n: u16, on: bool) {
         self.bus.write16(LED_SELECT, n & 7);
-        let c = if on { LedCtrl::ENABLE } else { LedCtrl::empty() };
+        let c = if on {
+            LedCtrl::ENABLE
+        } else {
+            LedCtrl::empty()
+        };
         self.bus.write16(LED_CTRL, c.bits());
     }
     /// Starts a conversion.

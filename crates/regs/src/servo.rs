@@ -41,15 +41,51 @@ pub const DAC_FULL_SCALE_MV: i32 = 10_000;
 
 /// The servo board's register table.
 pub const REGISTERS: [Register; 9] = [
-    Register { name: "BOARD_ID", offset: crate::BOARD_ID, access: Access::R },
-    Register { name: "ENC_CTRL", offset: ENC_CTRL, access: Access::W },
-    Register { name: "ENC0", offset: ENC0, access: Access::R },
-    Register { name: "ENC1", offset: ENC1, access: Access::R },
-    Register { name: "TIMER", offset: TIMER, access: Access::R },
-    Register { name: "DAC0", offset: DAC0, access: Access::W },
-    Register { name: "DAC1", offset: DAC1, access: Access::W },
-    Register { name: "AMP_CTRL", offset: AMP_CTRL, access: Access::RW },
-    Register { name: "AMP_STATUS", offset: AMP_STATUS, access: Access::R },
+    Register {
+        name: "BOARD_ID",
+        offset: crate::BOARD_ID,
+        access: Access::R,
+    },
+    Register {
+        name: "ENC_CTRL",
+        offset: ENC_CTRL,
+        access: Access::W,
+    },
+    Register {
+        name: "ENC0",
+        offset: ENC0,
+        access: Access::R,
+    },
+    Register {
+        name: "ENC1",
+        offset: ENC1,
+        access: Access::R,
+    },
+    Register {
+        name: "TIMER",
+        offset: TIMER,
+        access: Access::R,
+    },
+    Register {
+        name: "DAC0",
+        offset: DAC0,
+        access: Access::W,
+    },
+    Register {
+        name: "DAC1",
+        offset: DAC1,
+        access: Access::W,
+    },
+    Register {
+        name: "AMP_CTRL",
+        offset: AMP_CTRL,
+        access: Access::RW,
+    },
+    Register {
+        name: "AMP_STATUS",
+        offset: AMP_STATUS,
+        access: Access::R,
+    },
 ];
 
 bitflags! {

@@ -12,11 +12,13 @@
 //!   and all interrupts masked. The status word then reads `SafeStop`.
 //! * Panics: the message goes to the board's log ring, then the same safe stop.
 //! * A `critical-section` implementation that raises the SR interrupt mask to 7.
+//! * `memcpy` and friends in assembly, in place of compiler-builtins' miscompiled ones.
+//!
+//! All assembly is in `asm/rt.S`, assembled by GNU as (docs/toolchain.md says why).
 //!
 //! Only [`decode_frame`] and the fault bookkeeping build on the host (so they are unit tested
 //! there); the assembly and handlers exist only for `target_arch = "m68k"`.
 #![no_std]
-#![cfg_attr(target_arch = "m68k", feature(asm_experimental_arch))]
 #![deny(missing_docs)]
 
 use vme_map::{BoardId, FaultCode, FaultRecord};
@@ -117,9 +119,15 @@ mod tests {
         assert_eq!(decode_frame(&f, 0).fault_addr, 0x0003_0000);
         let g = [0x2000, 0x0000, 0x0400, 5 << 2]; // format 0, zero divide
         let r = decode_frame(&g, 0);
-        assert_eq!((r.vector, r.code, r.fault_addr), (5, FaultCode::ZeroDivide as u32, 0));
+        assert_eq!(
+            (r.vector, r.code, r.fault_addr),
+            (5, FaultCode::ZeroDivide as u32, 0)
+        );
         let s = [0x2000, 0, 0x0400, 24 << 2]; // spurious interrupt
-        assert_eq!(decode_frame(&s, 0).code, FaultCode::UnexpectedException as u32);
+        assert_eq!(
+            decode_frame(&s, 0).code,
+            FaultCode::UnexpectedException as u32
+        );
     }
 
     #[test]

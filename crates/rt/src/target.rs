@@ -1,81 +1,11 @@
 //! The target-only half of the runtime: assembly, handlers, panic, critical section.
 
-use core::arch::{asm, global_asm};
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use vme_map::bus::MmioGlobal;
 use vme_map::{BoardId, BoardSlot, FaultCode, FaultRecord, GlobalBus};
 
-// Vector table, reset and the common exception entry.
-//
-// LLVM's M68k assembler (LLVM 22) does not know every 68020 instruction and silently
-// assembles `move.w #imm, %sr` as a move to %d0, so privileged and missing instructions are
-// written as their encodings (MC68020 User's Manual) with the mnemonic in a comment.
-// `sim-host`'s image tests disassemble the reset code with the emulator's disassembler to
-// check them.
-//
-// Every vector but 0 (initial SSP) and 1 (reset PC) points at `_exception`: the 68020 stacks
-// a format/vector word, so one entry can tell all exceptions apart.
-global_asm!(
-    r#"
-    .section .vectors, "a"
-    .globl __vectors
-__vectors:
-    .long _stack_top
-    .long _reset
-    .rept 254
-    .long _exception
-    .endr
-
-    .section .text._reset, "ax"
-    .globl _reset
-_reset:
-    .short 0x46fc, 0x2700    /* move.w #0x2700, %sr */
-    lea _stack_top, %a0
-    move.l %a0, %sp
-    lea _sidata, %a0
-    lea _sdata, %a1
-    lea _edata, %a2
-1:
-    .short 0xb3ca            /* cmpa.l %a2, %a1 (not in LLVM's M68k assembler) */
-    bcc 2f
-    move.l (%a0)+, (%a1)+
-    bra 1b
-2:
-    lea _sbss, %a1
-    lea _ebss, %a2
-3:
-    .short 0xb3ca            /* cmpa.l %a2, %a1 (not in LLVM's M68k assembler) */
-    bcc 4f
-    .short 0x4299            /* clr.l (%a1)+ (not in LLVM's M68k assembler) */
-    bra 3b
-4:
-    jsr __rt_start
-5:
-    bra 5b
-
-    .section .text._exception, "ax"
-    .globl _exception
-_exception:
-    .short 0x46fc, 0x2700    /* move.w #0x2700, %sr */
-    move.l %sp, -(%sp)
-    jsr __rt_exception
-6:
-    bra 6b
-
-    .section .text.__rt_sr, "ax"
-    .globl __rt_sr_mask_all
-__rt_sr_mask_all:
-    moveq #0, %d0
-    .short 0x40c0            /* move.w %sr, %d0 */
-    .short 0x007c, 0x0700    /* ori.w #0x0700, %sr */
-    rts
-    .globl __rt_sr_restore
-__rt_sr_restore:
-    move.l (4,%sp), %d0
-    .short 0x46c0            /* move.w %d0, %sr */
-    rts
-"#
-);
+// The vector table, reset, exception entry, SR access and memory routines are in
+// `asm/rt.S`, assembled by GNU as from the build script.
 
 static BOARD: AtomicU8 = AtomicU8::new(BoardId::Sensing as u8);
 static IN_FAULT: AtomicBool = AtomicBool::new(false);
@@ -93,10 +23,12 @@ pub fn set_board(id: BoardId) {
 
 /// Halts the CPU for good: all interrupts masked, `STOP` until reset.
 pub fn halt() -> ! {
-    loop {
-        // SAFETY: STOP with the mask at 7 only waits for a reset (or NMI, which faults here).
-        unsafe { asm!(".short 0x4e72, 0x2700 /* stop #0x2700 */", options(nomem, nostack)) };
-    }
+    // SAFETY: STOP with the mask at 7 only waits for a reset.
+    unsafe { __rt_halt() }
+}
+
+extern "C" {
+    fn __rt_halt() -> !;
 }
 
 extern "Rust" {
@@ -113,9 +45,14 @@ extern "C" fn __rt_start() -> ! {
 /// Common end of every fault: safe outputs, record, halt. A fault while handling a fault
 /// only halts.
 fn safe_stop(rec: &FaultRecord) -> ! {
-    if IN_FAULT.swap(true, Ordering::Relaxed) {
+    // A plain load and store, not `swap`: interrupts are masked here, and LLVM's M68k backend
+    // miscompiles the compare-and-swap loop `swap` expands to (a register copy placed between
+    // the compare and the branch clobbers the condition codes; llvm/llvm-project#152816,
+    // #213564). docs/toolchain.md has the details.
+    if IN_FAULT.load(Ordering::Relaxed) {
         halt();
     }
+    IN_FAULT.store(true, Ordering::Relaxed);
     // SAFETY: the board's hook only writes its own private I/O.
     unsafe { __rt_safe_stop() };
     // SAFETY: every board maps global RAM at GLOBAL_RAM_BASE.
@@ -140,16 +77,31 @@ extern "C" fn __rt_exception(frame: *const u16) -> ! {
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    use core::fmt::Write;
     // SAFETY: global RAM is mapped on every board.
     let mut g = unsafe { MmioGlobal::new() };
     let hb = g.read_u32(BoardSlot::of(board()).heartbeat());
-    if !IN_FAULT.load(Ordering::Relaxed) {
-        let mut w = vme_map::log::LogFmt::new(board(), &mut g, hb);
-        let _ = write!(w, "panic: {}", info);
-        w.finish();
-    }
     let line = info.location().map(|l| l.line()).unwrap_or(0);
+    if !IN_FAULT.load(Ordering::Relaxed) {
+        // No `core::fmt` and no local buffer here: LLVM's M68k backend miscompiles both
+        // (docs/toolchain.md). The message is logged when it is a plain string, with the
+        // location appended, streamed straight into the log ring.
+        let mut t = vme_map::log::TextStream::for_board(board(), &mut g, hb);
+        t.push(&mut g, b"panic: ");
+        t.push(
+            &mut g,
+            info.message()
+                .as_str()
+                .unwrap_or("(formatted message)")
+                .as_bytes(),
+        );
+        if let Some(l) = info.location() {
+            t.push(&mut g, b" at ");
+            t.push(&mut g, l.file().as_bytes());
+            t.push(&mut g, b":");
+            t.push_decimal(&mut g, l.line());
+        }
+        t.finish(&mut g);
+    }
     safe_stop(&FaultRecord {
         code: FaultCode::Panic as u32,
         heartbeat: hb,

@@ -243,7 +243,12 @@ pub struct Lifecycle {
 impl Lifecycle {
     /// The lifecycle of board `id`.
     pub const fn new(id: BoardId) -> Self {
-        Self { id, slot: crate::layout::BoardSlot::of(id), last_serial: 0, mismatch_recorded: false }
+        Self {
+            id,
+            slot: crate::layout::BoardSlot::of(id),
+            last_serial: 0,
+            mismatch_recorded: false,
+        }
     }
 
     /// The board this lifecycle belongs to.
@@ -256,7 +261,10 @@ impl Lifecycle {
     pub fn boot(&mut self, bus: &mut dyn crate::GlobalBus) -> bool {
         if crate::layout::header_ok(bus) {
             self.slot.set_state(bus, BoardState::Booting);
-            self.last_serial = crate::layout::HOST_COMMAND.read(bus).map(|(c, _)| c.serial).unwrap_or(0);
+            self.last_serial = crate::layout::HOST_COMMAND
+                .read(bus)
+                .map(|(c, _)| c.serial)
+                .unwrap_or(0);
             return true;
         }
         if !self.mismatch_recorded {
@@ -286,7 +294,12 @@ impl Lifecycle {
     /// and marks the board `Degraded`; the board keeps looping in its safe behaviour.
     pub fn degraded(&mut self, bus: &mut dyn crate::GlobalBus, code: FaultCode, detail: u32) {
         let hb = bus.read_u32(self.slot.heartbeat());
-        let rec = FaultRecord { code: code as u32, heartbeat: hb, detail, ..Default::default() };
+        let rec = FaultRecord {
+            code: code as u32,
+            heartbeat: hb,
+            detail,
+            ..Default::default()
+        };
         self.slot.record_fault(bus, BoardState::Degraded, &rec);
     }
 
@@ -343,7 +356,12 @@ mod tests {
         let mut servo = Lifecycle::new(BoardId::Servo);
         let mut reflex = Lifecycle::new(BoardId::Reflex);
         assert!(servo.boot(&mut bus) && reflex.boot(&mut bus));
-        let cmd = HostCommand { command: host_cmd::INJECT_PANIC, arg0: 1, arg1: 0, serial: 1 };
+        let cmd = HostCommand {
+            command: host_cmd::INJECT_PANIC,
+            arg0: 1,
+            arg1: 0,
+            serial: 1,
+        };
         HOST_COMMAND.publish(&mut bus, &cmd);
         assert_eq!(reflex.poll_host(&mut bus), None);
         assert_eq!(servo.poll_host(&mut bus), Some(HostAction::InjectPanic));

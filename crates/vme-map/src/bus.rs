@@ -41,7 +41,12 @@ impl GlobalBus for ArrayBus<'_> {
     fn read_u32(&mut self, off: u32) -> u32 {
         debug_assert!(off % 4 == 0, "misaligned global RAM read at {off:#x}");
         let o = off as usize;
-        u32::from_be_bytes([self.mem[o], self.mem[o + 1], self.mem[o + 2], self.mem[o + 3]])
+        u32::from_be_bytes([
+            self.mem[o],
+            self.mem[o + 1],
+            self.mem[o + 2],
+            self.mem[o + 3],
+        ])
     }
     fn write_u32(&mut self, off: u32, val: u32) {
         debug_assert!(off % 4 == 0, "misaligned global RAM write at {off:#x}");
@@ -107,17 +112,11 @@ impl GlobalBus for MmioGlobal {
     }
     #[inline(always)]
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
-        let mut dc = current;
-        // SAFETY: CAS.L on an aligned, mapped global RAM word; it only touches that word.
-        unsafe {
-            core::arch::asm!(
-                "cas.l {dc}, {du}, ({a})",
-                dc = inout(reg_data) dc,
-                du = in(reg_data) new,
-                a = in(reg_addr) Self::ptr::<u32>(off),
-                options(nostack),
-            );
+        extern "C" {
+            // `CAS.L` in the runtime's assembly (crates/rt/asm/rt.S), linked into every image.
+            fn __vme_cas32(addr: *mut u32, current: u32, new: u32) -> u32;
         }
-        dc
+        // SAFETY: an aligned, mapped global RAM word; CAS.L touches only that word.
+        unsafe { __vme_cas32(Self::ptr::<u32>(off), current, new) }
     }
 }

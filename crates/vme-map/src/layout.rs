@@ -45,7 +45,9 @@ pub struct BoardSlot {
 impl BoardSlot {
     /// The slot of `board`.
     pub const fn of(board: BoardId) -> Self {
-        Self { base: BOARD_SLOTS + board.index() * BOARD_SLOT_STRIDE }
+        Self {
+            base: BOARD_SLOTS + board.index() * BOARD_SLOT_STRIDE,
+        }
     }
     /// Offset of the heartbeat word: bumped once per main-loop pass.
     pub const fn heartbeat(self) -> u32 {
@@ -189,7 +191,13 @@ pub struct Region {
 }
 
 const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Region {
-    Region { name, offset: s.offset(), size: SeqLock::<R>::SIZE, writer, seqlock: true }
+    Region {
+        name,
+        offset: s.offset(),
+        size: SeqLock::<R>::SIZE,
+        writer,
+        seqlock: true,
+    }
 }
 
 /// Every region of global RAM in address order.
@@ -210,8 +218,16 @@ pub const LAYOUT: [Region; 10] = [
     },
     seq("objects", OBJECTS, Writer::Board(BoardId::Sensing)),
     seq("servo_state", SERVO_STATE, Writer::Board(BoardId::Servo)),
-    seq("reflex_subgoal", REFLEX_SUBGOAL, Writer::Board(BoardId::Reflex)),
-    seq("planner_goal", PLANNER_GOAL, Writer::Board(BoardId::Planner)),
+    seq(
+        "reflex_subgoal",
+        REFLEX_SUBGOAL,
+        Writer::Board(BoardId::Reflex),
+    ),
+    seq(
+        "planner_goal",
+        PLANNER_GOAL,
+        Writer::Board(BoardId::Planner),
+    ),
     seq("host_command", HOST_COMMAND, Writer::Host),
     Region {
         name: "work_list",
@@ -243,9 +259,15 @@ const fn check_layout() {
     while i < LAYOUT.len() {
         let r = LAYOUT[i];
         assert!(r.offset % 4 == 0, "every region is word aligned");
-        assert!(r.offset + r.size <= GLOBAL_RAM_SIZE, "every region lies in global RAM");
+        assert!(
+            r.offset + r.size <= GLOBAL_RAM_SIZE,
+            "every region lies in global RAM"
+        );
         if i + 1 < LAYOUT.len() {
-            assert!(r.offset + r.size <= LAYOUT[i + 1].offset, "regions do not overlap");
+            assert!(
+                r.offset + r.size <= LAYOUT[i + 1].offset,
+                "regions do not overlap"
+            );
         }
         i += 1;
     }
@@ -263,4 +285,5 @@ const _: () = assert!(SeqLock::<HostCommand>::SIZE == 20);
 const _: () = assert!(WORK_ENTRY_BYTES == 32);
 const _: () = assert!(CSPACE_MAP_BYTES == 0x1_0000);
 const _: () = assert!(LOG_ENTRIES_OFFSET + LOG_ENTRIES * LOG_ENTRY_BYTES <= LOG_RING_STRIDE);
-const _: () = assert!(LAYOUT_END == LAYOUT[LAYOUT.len() - 1].offset + LAYOUT[LAYOUT.len() - 1].size);
+const _: () =
+    assert!(LAYOUT_END == LAYOUT[LAYOUT.len() - 1].offset + LAYOUT[LAYOUT.len() - 1].size);

@@ -17,7 +17,6 @@
 //! Global RAM is big-endian, like the 68020; offsets here are relative to
 //! [`GLOBAL_RAM_BASE`] as the boards see it.
 #![no_std]
-#![cfg_attr(target_arch = "m68k", feature(asm_experimental_arch))]
 #![deny(missing_docs)]
 
 pub mod board;

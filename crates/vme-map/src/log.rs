@@ -54,23 +54,21 @@ pub struct LogWriter {
 impl LogWriter {
     /// The writer for `board`'s ring.
     pub const fn new(board: BoardId) -> Self {
-        Self { ring: log_ring(board) }
+        Self {
+            ring: log_ring(board),
+        }
     }
 
-    fn push(&self, bus: &mut dyn GlobalBus, kind: Kind, arg: u32, heartbeat: u32, text: &[u8]) {
+    /// Logs an event code with an argument.
+    fn push_event(&self, bus: &mut dyn GlobalBus, arg: u32, heartbeat: u32) {
         let n = bus.read_u32(self.ring);
         let e = self.ring + LOG_ENTRIES_OFFSET + (n % LOG_ENTRIES) * LOG_ENTRY_BYTES;
-        // Invalidate first so a reader never pairs an old sequence with new contents.
         bus.write_u32(e, 0);
-        let len = text.len().min(PAYLOAD_BYTES);
-        bus.write_u32(e + 4, (kind as u32) << 24 | len as u32);
+        bus.write_u32(e + 4, (Kind::Event as u32) << 24);
         bus.write_u32(e + 8, heartbeat);
         bus.write_u32(e + 12, arg);
-        let mut buf = [0u8; PAYLOAD_BYTES];
-        buf[..len].copy_from_slice(&text[..len]);
-        for i in 0..PAYLOAD_BYTES / 4 {
-            let w = u32::from_be_bytes([buf[4 * i], buf[4 * i + 1], buf[4 * i + 2], buf[4 * i + 3]]);
-            bus.write_u32(e + 16 + 4 * i as u32, w);
+        for i in 0..(PAYLOAD_BYTES as u32 / 4) {
+            bus.write_u32(e + 16 + 4 * i, 0);
         }
         bus.write_u32(e, n.wrapping_add(1));
         bus.write_u32(self.ring, n.wrapping_add(1));
@@ -78,57 +76,118 @@ impl LogWriter {
 
     /// Logs an event code with an argument.
     pub fn event(&self, bus: &mut dyn GlobalBus, heartbeat: u32, code: u32) {
-        self.push(bus, Kind::Event, code, heartbeat, &[]);
+        self.push_event(bus, code, heartbeat);
     }
 
-    /// Logs `text`, split over as many entries as it needs (at most the ring's size).
+    /// Logs `text`, split over as many entries as it needs.
     pub fn text(&self, bus: &mut dyn GlobalBus, heartbeat: u32, text: &[u8]) {
-        let mut chunks = text.chunks(PAYLOAD_BYTES).take(LOG_ENTRIES as usize).peekable();
-        if chunks.peek().is_none() {
-            self.push(bus, Kind::TextEnd, 0, heartbeat, &[]);
-        }
-        while let Some(c) = chunks.next() {
-            let kind = if chunks.peek().is_some() { Kind::Text } else { Kind::TextEnd };
-            self.push(bus, kind, 0, heartbeat, c);
-        }
+        let mut t = TextStream::new(self.ring, bus, heartbeat);
+        t.push(bus, text);
+        t.finish(bus);
     }
 }
 
-/// A [`core::fmt::Write`] sink that streams formatted text into a log ring, for panic
-/// messages: it needs no buffer beyond one entry.
-pub struct LogFmt<'a> {
-    writer: LogWriter,
-    bus: &'a mut dyn GlobalBus,
+/// Text streamed straight into a ring's entries in global RAM, a byte at a time: no local
+/// buffer, so the panic handler can use it (LLVM's M68k backend miscompiles some indexed
+/// stores into stack buffers; docs/toolchain.md).
+pub struct TextStream {
+    ring: u32,
+    seq: u32,
+    fill: u32,
+    open: bool,
     heartbeat: u32,
-    buf: [u8; PAYLOAD_BYTES],
-    len: usize,
 }
 
-impl<'a> LogFmt<'a> {
-    /// A sink writing to `board`'s ring.
-    pub fn new(board: BoardId, bus: &'a mut dyn GlobalBus, heartbeat: u32) -> Self {
-        Self { writer: LogWriter::new(board), bus, heartbeat, buf: [0; PAYLOAD_BYTES], len: 0 }
-    }
-
-    /// Writes the last fragment as a [`Kind::TextEnd`] entry.
-    pub fn finish(mut self) {
-        let len = self.len;
-        self.writer.push(self.bus, Kind::TextEnd, 0, self.heartbeat, &self.buf[..len]);
-        self.len = 0;
-    }
-}
-
-impl core::fmt::Write for LogFmt<'_> {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        for &b in s.as_bytes() {
-            if self.len == PAYLOAD_BYTES {
-                self.writer.push(self.bus, Kind::Text, 0, self.heartbeat, &self.buf);
-                self.len = 0;
-            }
-            self.buf[self.len] = b;
-            self.len += 1;
+impl TextStream {
+    fn new(ring: u32, bus: &mut dyn GlobalBus, heartbeat: u32) -> Self {
+        Self {
+            ring,
+            seq: bus.read_u32(ring),
+            fill: 0,
+            open: false,
+            heartbeat,
         }
-        Ok(())
+    }
+
+    /// A stream into `board`'s ring.
+    pub fn for_board(board: BoardId, bus: &mut dyn GlobalBus, heartbeat: u32) -> Self {
+        Self::new(log_ring(board), bus, heartbeat)
+    }
+
+    fn entry(&self) -> u32 {
+        self.ring + LOG_ENTRIES_OFFSET + (self.seq % LOG_ENTRIES) * LOG_ENTRY_BYTES
+    }
+
+    fn open(&mut self, bus: &mut dyn GlobalBus) {
+        let e = self.entry();
+        // Invalidate first so a reader never pairs an old sequence with new contents.
+        bus.write_u32(e, 0);
+        for i in 0..(PAYLOAD_BYTES as u32 / 4) {
+            bus.write_u32(e + 16 + 4 * i, 0);
+        }
+        self.open = true;
+        self.fill = 0;
+    }
+
+    fn close(&mut self, bus: &mut dyn GlobalBus, kind: Kind) {
+        let e = self.entry();
+        bus.write_u32(e + 4, (kind as u32) << 24 | self.fill);
+        bus.write_u32(e + 8, self.heartbeat);
+        bus.write_u32(e + 12, 0);
+        let next = self.seq.wrapping_add(1);
+        bus.write_u32(e, next);
+        bus.write_u32(self.ring, next);
+        self.seq = next;
+        self.open = false;
+        self.fill = 0;
+    }
+
+    /// Appends bytes.
+    pub fn push(&mut self, bus: &mut dyn GlobalBus, bytes: &[u8]) {
+        for &b in bytes {
+            if self.open && self.fill == PAYLOAD_BYTES as u32 {
+                self.close(bus, Kind::Text);
+            }
+            if !self.open {
+                self.open(bus);
+            }
+            bus.write_u8(self.entry() + 16 + self.fill, b);
+            self.fill += 1;
+        }
+    }
+
+    /// Appends `v` in decimal.
+    pub fn push_decimal(&mut self, bus: &mut dyn GlobalBus, v: u32) {
+        // A fixed sequence the compiler unrolls: the loop form of this was miscompiled by
+        // LLVM's M68k backend (caught by `cargo xtask images`; docs/toolchain.md).
+        const POWERS: [u32; 10] = [
+            1_000_000_000,
+            100_000_000,
+            10_000_000,
+            1_000_000,
+            100_000,
+            10_000,
+            1_000,
+            100,
+            10,
+            1,
+        ];
+        let mut started = false;
+        for p in POWERS {
+            let d = (v / p % 10) as u8;
+            started |= d != 0 || p == 1;
+            if started {
+                self.push(bus, &[b'0' + d]);
+            }
+        }
+    }
+
+    /// Ends the message (an empty message is one empty final entry).
+    pub fn finish(mut self, bus: &mut dyn GlobalBus) {
+        if !self.open {
+            self.open(bus);
+        }
+        self.close(bus, Kind::TextEnd);
     }
 }
 
@@ -167,7 +226,9 @@ pub fn read_entries(
             continue; // being rewritten
         }
         let hdr = bus.read_u32(e + 4);
-        let Some(kind) = Kind::from_u8((hdr >> 24) as u8) else { continue };
+        let Some(kind) = Kind::from_u8((hdr >> 24) as u8) else {
+            continue;
+        };
         let mut payload = [0u8; PAYLOAD_BYTES];
         for i in 0..PAYLOAD_BYTES / 4 {
             let w = bus.read_u32(e + 16 + 4 * i as u32).to_be_bytes();
@@ -189,7 +250,6 @@ pub fn read_entries(
 mod tests {
     use super::*;
     use crate::bus::ArrayBus;
-    use core::fmt::Write;
 
     fn collect_text(bus: &mut dyn GlobalBus, board: BoardId) -> ([u8; 1024], usize) {
         let mut out = [0u8; 1024];
@@ -204,14 +264,35 @@ mod tests {
     }
 
     #[test]
-    fn formatted_text_spans_entries_and_reassembles() {
+    fn text_spans_entries_and_reassembles() {
         let mut mem = [0u8; 0x2_8000];
         let mut bus = ArrayBus::new(&mut mem);
-        let mut w = LogFmt::new(BoardId::Reflex, &mut bus, 7);
-        write!(w, "panicked at src/main.rs:12: value {} out of range", 42).unwrap();
-        w.finish();
+        let w = LogWriter::new(BoardId::Reflex);
+        let msg = b"panic: value out of range at src/main.rs:12";
+        w.text(&mut bus, 7, msg);
+        let mut kinds = [Kind::Event; 4];
+        let mut n = 0;
+        read_entries(&mut bus, BoardId::Reflex, 0, &mut |e| {
+            kinds[n] = e.kind;
+            n += 1;
+        });
+        assert_eq!(&kinds[..n], &[Kind::Text, Kind::Text, Kind::TextEnd]);
         let (out, len) = collect_text(&mut bus, BoardId::Reflex);
-        assert_eq!(&out[..len], b"panicked at src/main.rs:12: value 42 out of range");
+        assert_eq!(&out[..len], msg);
+        // An empty message is one empty final entry; exactly 16 bytes is one entry.
+        w.text(&mut bus, 8, b"");
+        w.text(&mut bus, 8, &[b'x'; PAYLOAD_BYTES]);
+        assert_eq!(read_entries(&mut bus, BoardId::Reflex, 0, &mut |_| {}), 5);
+        let mut t = TextStream::for_board(BoardId::Planner, &mut bus, 1);
+        t.push(&mut bus, b"line ");
+        t.push_decimal(&mut bus, 0);
+        t.push(&mut bus, b" ");
+        t.push_decimal(&mut bus, 4_294_967_295);
+        t.push(&mut bus, b" ");
+        t.push_decimal(&mut bus, 1000);
+        t.finish(&mut bus);
+        let (out, len) = collect_text(&mut bus, BoardId::Planner);
+        assert_eq!(&out[..len], b"line 0 4294967295 1000");
         // Other rings untouched.
         assert_eq!(collect_text(&mut bus, BoardId::Servo).1, 0);
     }

@@ -109,7 +109,10 @@ impl<R: Record> SeqLock<R> {
     /// The slot at byte offset `off` of global RAM (4-byte aligned).
     pub const fn at(off: u32) -> Self {
         assert!(off % 4 == 0, "seqlock slots are word aligned");
-        Self { off, _r: PhantomData }
+        Self {
+            off,
+            _r: PhantomData,
+        }
     }
 
     /// Byte offset of the slot (its sequence word).
@@ -190,7 +193,11 @@ mod tests {
         let mut mem = [0u8; 64];
         let mut bus = ArrayBus::new(&mut mem);
         let slot = SeqLock::<Pair>::at(8);
-        let p = Pair { a: 1, b: -2, c: 0xdead_beef };
+        let p = Pair {
+            a: 1,
+            b: -2,
+            c: 0xdead_beef,
+        };
         slot.publish(&mut bus, &p);
         let (q, seq) = slot.read(&mut bus).unwrap();
         assert_eq!(p, q);
@@ -250,17 +257,33 @@ mod tests {
         // Reads of one attempt: 1 = first sequence, 2..=4 = words, 5 = second sequence.
         for strike in 1..=5u32 {
             let mut mem = [0u8; 64];
-            let mut racing = RacingBus { inner: ArrayBus::new(&mut mem), reads: 0, strike_at: 0 };
+            let mut racing = RacingBus {
+                inner: ArrayBus::new(&mut mem),
+                reads: 0,
+                strike_at: 0,
+            };
             let slot = SeqLock::<Pair>::at(0);
             slot.publish(&mut racing, &Pair { a: 5, b: 5, c: 5 });
             racing.reads = 0;
             racing.strike_at = strike;
             let (rec, seq) = slot.read(&mut racing).unwrap();
             // Whatever the interleaving, the reader returns the new record whole.
-            assert_eq!(rec, Pair { a: 1000, b: 5, c: 5 }, "strike at read {strike}");
+            assert_eq!(
+                rec,
+                Pair {
+                    a: 1000,
+                    b: 5,
+                    c: 5
+                },
+                "strike at read {strike}"
+            );
             assert_eq!(seq, 4);
             let retried = racing.reads > 5;
-            assert_eq!(retried, strike > 1, "strike at read {strike}: retried={retried}");
+            assert_eq!(
+                retried,
+                strike > 1,
+                "strike at read {strike}: retried={retried}"
+            );
         }
     }
 }

@@ -70,7 +70,10 @@ impl Record for ObjectTable {
         }
     }
     fn decode(get: &mut dyn FnMut(u32) -> u32) -> Self {
-        let mut t = ObjectTable { frame: get(0), ..Default::default() };
+        let mut t = ObjectTable {
+            frame: get(0),
+            ..Default::default()
+        };
         for (b, beacon) in t.beacons.iter_mut().enumerate() {
             let base = 1 + b as u32 * Beacon::WORDS;
             *beacon = Beacon::decode(&mut |i| get(base + i));
@@ -78,7 +81,6 @@ impl Record for ObjectTable {
         t
     }
 }
-
 
 record! {
     /// The servo's published state (written by the servo board, read by reflex and planner).

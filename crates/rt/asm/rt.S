@@ -1,0 +1,162 @@
+/* The 68020 runtime's assembly (crates/rt; design.md section 8).
+ *
+ * Assembled by GNU as (binutils-m68k-linux-gnu, -m68020) from rt's build script: LLVM's
+ * M68k assembler rejects much of the 68020 instruction set and silently mis-assembles some
+ * of it (docs/toolchain.md). Motorola syntax with % registers.
+ *
+ * Only the C ABI's scratch registers (d0, d1, a0, a1) are used by the callable routines;
+ * pointers are returned in both d0 and a0.
+ */
+
+/* ---- vector table: 256 longs at address 0 ---- */
+    .section .vectors, "a"
+    .globl __vectors
+__vectors:
+    .long _stack_top            /* 0: initial SSP */
+    .long _reset                /* 1: reset PC */
+    .rept 254
+    .long _exception            /* 2..255: every exception and interrupt */
+    .endr
+
+/* ---- reset: mask interrupts, stack, .data copy, .bss clear, Rust ---- */
+    .section .text._reset, "ax"
+    .globl _reset
+_reset:
+    move.w  #0x2700, %sr
+    lea     _stack_top, %sp
+    lea     _sidata, %a0
+    lea     _sdata, %a1
+    lea     _edata, %a2
+1:  cmpa.l  %a2, %a1
+    bcc.s   2f
+    move.l  (%a0)+, (%a1)+
+    bra.s   1b
+2:  lea     _ebss, %a2
+3:  cmpa.l  %a2, %a1            /* a1 = _edata = _sbss (the linker script keeps them adjacent) */
+    bcc.s   4f
+    clr.l   (%a1)+
+    bra.s   3b
+4:  jsr     __rt_start
+5:  bra.s   5b
+
+/* ---- common exception entry: the 68020 stacks SR, PC and a format/vector word ---- */
+    .section .text._exception, "ax"
+    .globl _exception
+_exception:
+    move.w  #0x2700, %sr
+    move.l  %sp, -(%sp)         /* argument: the exception frame */
+    jsr     __rt_exception
+6:  bra.s   6b
+
+/* ---- SR access for the critical section ---- */
+    .section .text.__rt_sr, "ax"
+    .globl __rt_sr_mask_all
+__rt_sr_mask_all:               /* u32 __rt_sr_mask_all(void): old SR, mask raised to 7 */
+    moveq   #0, %d0
+    move.w  %sr, %d0
+    ori.w   #0x0700, %sr
+    rts
+    .globl __rt_sr_restore
+__rt_sr_restore:                /* void __rt_sr_restore(u32 sr) */
+    move.l  4(%sp), %d0
+    move.w  %d0, %sr
+    rts
+    .globl __rt_halt
+__rt_halt:                      /* never returns: STOP with every interrupt masked */
+7:  stop    #0x2700
+    bra.s   7b
+
+/* ---- memory routines (compiler-builtins' are miscompiled: docs/toolchain.md) ---- */
+    .section .text.__rt_mem, "ax"   /* one section: kept whole whenever memcpy is used */
+    .globl memcpy
+memcpy:                         /* void *memcpy(void *dst, const void *src, size_t n) */
+    movea.l 4(%sp), %a0
+    movea.l 8(%sp), %a1
+    move.l  12(%sp), %d1
+    move.l  %a0, %d0
+    btst    #0, %d0
+    bne.s   3f
+    move.l  %a1, %d0
+    btst    #0, %d0
+    bne.s   3f
+1:  subq.l  #4, %d1             /* both even: the 68020 moves a long on any even address */
+    bcs.s   2f
+    move.l  (%a1)+, (%a0)+
+    bra.s   1b
+2:  addq.l  #4, %d1
+3:  tst.l   %d1
+    beq.s   4f
+    move.b  (%a1)+, (%a0)+
+    subq.l  #1, %d1
+    bra.s   3b
+4:  move.l  4(%sp), %d0
+    movea.l %d0, %a0
+    rts
+
+    .globl memmove
+memmove:                        /* void *memmove(void *dst, const void *src, size_t n) */
+    movea.l 4(%sp), %a0
+    movea.l 8(%sp), %a1
+    move.l  12(%sp), %d1
+    cmpa.l  %a1, %a0
+    bls     memcpy              /* dst <= src: a forward copy is safe */
+    move.l  %a1, %d0
+    add.l   %d1, %d0
+    cmpa.l  %d0, %a0
+    bcc     memcpy              /* dst >= src + n: no overlap */
+    adda.l  %d1, %a0
+    adda.l  %d1, %a1
+1:  tst.l   %d1
+    beq.s   2f
+    move.b  -(%a1), -(%a0)
+    subq.l  #1, %d1
+    bra.s   1b
+2:  move.l  4(%sp), %d0
+    movea.l %d0, %a0
+    rts
+
+    .globl memset
+memset:                         /* void *memset(void *dst, int c, size_t n) */
+    movea.l 4(%sp), %a0
+    move.l  8(%sp), %d0
+    move.l  12(%sp), %d1
+1:  tst.l   %d1
+    beq.s   2f
+    move.b  %d0, (%a0)+
+    subq.l  #1, %d1
+    bra.s   1b
+2:  move.l  4(%sp), %d0
+    movea.l %d0, %a0
+    rts
+
+    .globl memcmp
+    .globl bcmp
+memcmp:                         /* int memcmp(const void *a, const void *b, size_t n) */
+bcmp:
+    movea.l 4(%sp), %a0
+    movea.l 8(%sp), %a1
+    move.l  12(%sp), %d1
+1:  tst.l   %d1
+    beq.s   3f
+    moveq   #0, %d0
+    move.b  (%a0)+, %d0
+    cmp.b   (%a1)+, %d0
+    bne.s   2f
+    subq.l  #1, %d1
+    bra.s   1b
+2:  moveq   #0, %d1
+    move.b  -(%a1), %d1
+    sub.l   %d1, %d0
+    rts
+3:  moveq   #0, %d0
+    rts
+
+/* ---- indivisible compare-and-swap on global RAM (vme-map's GlobalBus::cas_u32) ---- */
+    .section .text.__vme_cas32, "ax"
+    .globl __vme_cas32
+__vme_cas32:                    /* u32 __vme_cas32(u32 *addr, u32 current, u32 new): value found */
+    movea.l 4(%sp), %a0
+    move.l  8(%sp), %d0
+    move.l  12(%sp), %d1
+    cas.l   %d0, %d1, (%a0)     /* equal: store new; else d0 = value found */
+    rts

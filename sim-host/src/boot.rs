@@ -1,0 +1,221 @@
+//! Powering the system up in image mode (design.md sections 4 and 7): the host clears
+//! global RAM and writes its header, every board's image is loaded and the boards leave
+//! reset together; then they run asynchronously, each on its own emulated 68020, meeting
+//! only in global RAM.
+
+use crate::devices::PrivateIo;
+use crate::emu::{EmuBoard, RunState, CPU_HZ};
+use crate::image::{Image, ImageError};
+use std::path::{Path, PathBuf};
+use vme_map::log::{read_entries, Kind};
+use vme_map::records::HostCommand;
+use vme_map::{ArrayBus, BoardId, BoardSlot, FaultRecord, GlobalBus, StatusWord, GLOBAL_RAM_SIZE};
+
+/// Where `cargo xtask images` writes the images.
+pub fn default_images_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/images")
+}
+
+/// The image file a board runs: the three C-space boards share one image and tell
+/// themselves apart by their board-ID switch.
+pub fn image_name(board: BoardId) -> &'static str {
+    match board {
+        BoardId::Cspace0 | BoardId::Cspace1 | BoardId::Cspace2 => "cspace",
+        b => b.name(),
+    }
+}
+
+/// Parses a board name as used on the command line (`cspace` means `cspace0`).
+pub fn parse_board(name: &str) -> Option<BoardId> {
+    if name == "cspace" {
+        return Some(BoardId::Cspace0);
+    }
+    BoardId::ALL.into_iter().find(|b| b.name() == name)
+}
+
+/// The five boards of the standard system (one C-space board).
+pub const FIVE: [BoardId; 5] = [
+    BoardId::Sensing,
+    BoardId::Cspace0,
+    BoardId::Servo,
+    BoardId::Reflex,
+    BoardId::Planner,
+];
+
+/// Cycles each board runs before the next takes its turn: 100 us at 16.7 MHz. The boards
+/// are asynchronous; this only bounds how far apart their clocks drift.
+pub const SLICE_CYCLES: u64 = 1670;
+
+/// The boards in image mode and the global RAM they share.
+pub struct System {
+    /// Global RAM, 8 MiB.
+    pub global: Vec<u8>,
+    /// The boards, in the order given.
+    pub boards: Vec<EmuBoard>,
+    /// The system clock in CPU cycles since power-up: every board has run at least this far.
+    pub now: u64,
+}
+
+impl System {
+    /// Loads `<dir>/<image>.elf` for each board, writes the global RAM header and resets
+    /// every board.
+    pub fn power_up(dir: &Path, boards: &[BoardId]) -> Result<System, ImageError> {
+        let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+        vme_map::init_header(&mut ArrayBus::new(&mut global));
+        let mut out = Vec::new();
+        for &b in boards {
+            let image = Image::load(&dir.join(format!("{}.elf", image_name(b))))?;
+            out.push(EmuBoard::new(
+                b,
+                &image,
+                Box::new(PrivateIo::for_board(b)),
+                &mut global,
+            ));
+        }
+        Ok(System {
+            global,
+            boards: out,
+            now: 0,
+        })
+    }
+
+    /// Global RAM as a [`GlobalBus`], as the host reads and writes it.
+    pub fn bus(&mut self) -> ArrayBus<'_> {
+        ArrayBus::new(&mut self.global)
+    }
+
+    /// Runs every board for `cycles` CPU cycles, interleaved in slices.
+    pub fn run_cycles(&mut self, cycles: u64) {
+        let end = self.now + cycles;
+        while self.now < end {
+            let target = (self.now + SLICE_CYCLES).min(end);
+            for b in &mut self.boards {
+                if b.cycles < target {
+                    b.run(&mut self.global, target - b.cycles);
+                }
+            }
+            self.now = target;
+        }
+    }
+
+    /// Runs every board for `ms` milliseconds of emulated time.
+    pub fn run_ms(&mut self, ms: f64) {
+        self.run_cycles((ms * CPU_HZ as f64 / 1000.0) as u64);
+    }
+
+    /// The board's heartbeat.
+    pub fn heartbeat(&mut self, id: BoardId) -> u32 {
+        self.bus().read_u32(BoardSlot::of(id).heartbeat())
+    }
+
+    /// The board's status word.
+    pub fn status(&mut self, id: BoardId) -> StatusWord {
+        BoardSlot::of(id).status_word(&mut self.bus())
+    }
+
+    /// The board's last fault record, if it has recorded one.
+    pub fn fault(&mut self, id: BoardId) -> Option<FaultRecord> {
+        let st = self.status(id);
+        if st.faults() == 0 {
+            return None;
+        }
+        BoardSlot::of(id)
+            .fault()
+            .read(&mut self.bus())
+            .ok()
+            .map(|(r, _)| r)
+    }
+
+    /// The text of the board's log ring, entries joined, one line per message.
+    pub fn log_text(&mut self, id: BoardId) -> String {
+        let mut out = String::new();
+        read_entries(&mut self.bus(), id, 0, &mut |e| match e.kind {
+            Kind::Text => out.push_str(&String::from_utf8_lossy(&e.payload[..e.len])),
+            Kind::TextEnd => {
+                out.push_str(&String::from_utf8_lossy(&e.payload[..e.len]));
+                out.push('\n');
+            }
+            Kind::Event => out.push_str(&format!("event {:#x}\n", e.arg)),
+        });
+        out
+    }
+
+    /// Publishes a host command (the host is the command record's only writer).
+    pub fn host_command(&mut self, command: u32, board: BoardId) {
+        let mut bus = self.bus();
+        let serial = vme_map::HOST_COMMAND
+            .read(&mut bus)
+            .map(|(c, _)| c.serial)
+            .unwrap_or(0)
+            + 1;
+        let cmd = HostCommand {
+            command,
+            arg0: board.index(),
+            arg1: 0,
+            serial,
+        };
+        vme_map::HOST_COMMAND.publish(&mut bus, &cmd);
+    }
+
+    /// The board with identity `id`.
+    pub fn board(&mut self, id: BoardId) -> Option<&mut EmuBoard> {
+        self.boards.iter_mut().find(|b| b.id == id)
+    }
+}
+
+/// What `sim-host boot` reports for one board.
+#[derive(Clone, Debug)]
+pub struct BootReport {
+    /// The board.
+    pub board: BoardId,
+    /// Cycles from reset to the first heartbeat (`None` if it never beat).
+    pub cycles_to_first_heartbeat: Option<u64>,
+    /// Heartbeat at the end of the run.
+    pub heartbeat: u32,
+    /// Main-loop passes per second of emulated time after the first heartbeat.
+    pub loops_per_s: f64,
+    /// Status at the end.
+    pub status: StatusWord,
+    /// Whether the CPU still runs.
+    pub running: bool,
+}
+
+/// Boots `boards` from the images in `dir`, measures each one's cycles from reset to its
+/// first heartbeat, then runs the whole system for `run_ms` and reports.
+pub fn boot(dir: &Path, boards: &[BoardId], run_ms: f64) -> Result<Vec<BootReport>, ImageError> {
+    let mut sys = System::power_up(dir, boards)?;
+    let limit = CPU_HZ; // one second of emulated time
+    let mut first = Vec::new();
+    for i in 0..sys.boards.len() {
+        let id = sys.boards[i].id;
+        let off = BoardSlot::of(id).heartbeat();
+        let mut got = None;
+        while sys.boards[i].cycles < limit && sys.boards[i].state == RunState::Running {
+            sys.boards[i].step(&mut sys.global);
+            if ArrayBus::new(&mut sys.global).read_u32(off) != 0 {
+                got = Some(sys.boards[i].cycles);
+                break;
+            }
+        }
+        first.push(got);
+    }
+    // Bring every board to the same clock, then run together.
+    let start = sys.boards.iter().map(|b| b.cycles).max().unwrap_or(0);
+    sys.run_cycles(start);
+    let hb0: Vec<u32> = boards.iter().map(|&b| sys.heartbeat(b)).collect();
+    sys.run_ms(run_ms);
+    let mut out = Vec::new();
+    for (i, &b) in boards.iter().enumerate() {
+        let hb = sys.heartbeat(b);
+        let status = sys.status(b);
+        out.push(BootReport {
+            board: b,
+            cycles_to_first_heartbeat: first[i],
+            heartbeat: hb,
+            loops_per_s: (hb.wrapping_sub(hb0[i])) as f64 / (run_ms / 1000.0),
+            status,
+            running: sys.boards[i].state == RunState::Running,
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,15 @@
+//! The host simulator of the five-board controller (design.md section 7).
+//!
+//! * [`image`]: board images (ELF, S-record, binary) and why one is refused.
+//! * [`emu`]: a board's real image on an emulated 68020 and the bus it sees.
+//! * [`devices`]: the boards' private I/O at register level.
+//! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
+#![deny(missing_docs)]
+
+pub mod boot;
+pub mod devices;
+pub mod emu;
+pub mod image;
+
+/// Names of the five board images, as built by `cargo xtask images`.
+pub const IMAGE_NAMES: [&str; 5] = ["sensing", "cspace", "servo", "reflex", "planner"];

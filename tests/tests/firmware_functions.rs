@@ -1,0 +1,82 @@
+//! Firmware functions called one at a time on the emulated 68020, against host references.
+
+use sim_host::devices::PrivateIo;
+use sim_host::emu::EmuBoard;
+use sim_host::image::Image;
+use system_tests::images_dir;
+use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+
+fn board() -> (EmuBoard, Image, Vec<u8>) {
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let b = EmuBoard::new(
+        BoardId::Reflex,
+        &img,
+        Box::new(PrivateIo::for_board(BoardId::Reflex)),
+        &mut global,
+    );
+    (b, img, global)
+}
+
+/// Scratch area in the board's RAM for test buffers.
+const BUF: u32 = 0x000C_0000;
+
+#[test]
+fn memcpy_memmove_memset_memcmp_match_the_host() {
+    let (mut b, img, mut g) = board();
+    let f = |n: &str| img.symbol(n).unwrap_or_else(|| panic!("{n} not in image"));
+    let pattern: Vec<u8> = (0..64u32).map(|i| (i * 37 + 11) as u8).collect();
+    for (dst_off, src_off, n) in [
+        (0u32, 100u32, 0u32),
+        (0, 100, 1),
+        (0, 100, 7),
+        (2, 102, 33),
+        (1, 100, 20),
+        (0, 101, 21),
+        (3, 97, 64),
+    ] {
+        b.ram[BUF as usize..BUF as usize + 512].fill(0xEE);
+        b.ram[(BUF + 256) as usize..(BUF + 320) as usize].copy_from_slice(&pattern);
+        let (dst, src) = (BUF + dst_off, BUF + 256 + src_off - 100);
+        let (ret, _) = b
+            .call(&mut g, f("memcpy"), &[dst, src, n], 100_000)
+            .expect("memcpy returns");
+        assert_eq!(ret, dst);
+        let want = &b.ram[src as usize..(src + n) as usize].to_vec();
+        assert_eq!(
+            &b.ram[dst as usize..(dst + n) as usize],
+            &want[..],
+            "memcpy({dst_off},{src_off},{n})"
+        );
+        assert_eq!(b.ram[(dst + n) as usize], 0xEE, "memcpy wrote past the end");
+        if dst_off > 0 {
+            assert_eq!(
+                b.ram[(dst - 1) as usize],
+                0xEE,
+                "memcpy wrote before the start"
+            );
+        }
+    }
+    // Overlapping memmove both ways.
+    for (d, s) in [(BUF + 5, BUF), (BUF, BUF + 5)] {
+        b.ram[BUF as usize..BUF as usize + 64].copy_from_slice(&pattern);
+        let mut host = pattern.clone();
+        let (d0, s0) = ((d - BUF) as usize, (s - BUF) as usize);
+        host.copy_within(s0..s0 + 40, d0);
+        b.call(&mut g, f("memmove"), &[d, s, 40], 100_000).unwrap();
+        assert_eq!(&b.ram[BUF as usize..BUF as usize + 64], &host[..]);
+    }
+    b.call(&mut g, f("memset"), &[BUF + 3, 0x1A5, 9], 100_000)
+        .unwrap();
+    assert_eq!(&b.ram[(BUF + 3) as usize..(BUF + 12) as usize], &[0xA5; 9]);
+    assert_ne!(b.ram[(BUF + 12) as usize], 0xA5);
+    b.ram[BUF as usize..BUF as usize + 4].copy_from_slice(b"abcd");
+    b.ram[(BUF + 8) as usize..(BUF + 12) as usize].copy_from_slice(b"abzd");
+    let cmp = |b: &mut EmuBoard, g: &mut Vec<u8>, n| {
+        b.call(g, f("memcmp"), &[BUF, BUF + 8, n], 100_000)
+            .unwrap()
+            .0 as i32
+    };
+    assert_eq!(cmp(&mut b, &mut g, 2), 0);
+    assert!(cmp(&mut b, &mut g, 4) < 0);
+}

@@ -1,0 +1,222 @@
+//! The CCR-clobber check: refuses images in which LLVM's M68k backend placed a register
+//! move between an instruction that sets the condition codes and the branch that reads them
+//! (llvm/llvm-project#152816, #213564; docs/toolchain.md).
+//!
+//! On the 68k, `MOVE`, `MOVEQ` and `CLR` set N and Z and clear V and C, but LLVM models its
+//! register copies as leaving the flags alone. The backend never means to branch on a move's
+//! flags (it emits `TST`/`CMP` for that), so a conditional branch or `Scc` whose nearest
+//! flag-setting predecessor in straight-line code is a move is a miscompile.
+
+/// One miscompiled site.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Hit {
+    /// Function (symbol) containing it.
+    pub function: String,
+    /// Address of the branch.
+    pub branch_addr: u32,
+    /// The branch, as disassembled.
+    pub branch: String,
+    /// The move that clobbers the flags, as disassembled.
+    pub clobber: String,
+}
+
+/// Functions only reachable through `core::fmt` formatting, which the firmware never does
+/// (the panic handler logs without formatting). They are linked because core's panic paths
+/// refer to them. Hits inside them are reported but do not fail the build.
+pub const NEVER_EXECUTED: [&str; 2] = ["4core3fmt", "4core3str5count"];
+
+fn stem(mn: &str) -> &str {
+    mn.split('.').next().unwrap_or(mn)
+}
+
+/// Whether a mnemonic is a conditional branch or set-on-condition (reads the flags).
+fn reads_ccr(mn: &str) -> bool {
+    const CC: [&str; 14] = [
+        "eq", "ne", "cs", "cc", "ls", "hi", "lt", "ge", "gt", "le", "mi", "pl", "vs", "vc",
+    ];
+    let m = stem(mn);
+    for p in ["b", "s"] {
+        if let Some(rest) = m.strip_prefix(p) {
+            for c in CC {
+                if let Some(sz) = rest.strip_prefix(c) {
+                    if ["", "s", "b", "w", "l"].contains(&sz) {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    false
+}
+
+/// How an instruction affects the flags.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ccr {
+    /// Leaves them alone.
+    Keeps,
+    /// A move-class instruction: the clobber LLVM does not expect.
+    Move,
+    /// An operation whose flags the branch may mean to read.
+    Op,
+    /// Ends straight-line code (branch, jump, call, return).
+    Flow,
+}
+
+fn classify(mn: &str, ops: &str) -> Ccr {
+    let m = stem(mn);
+    let to_areg = ops
+        .trim_end()
+        .rsplit(',')
+        .next()
+        .is_some_and(|d| d.trim().starts_with("%a") || d.trim() == "%sp" || d.trim() == "%fp");
+    if m.starts_with("movea")
+        || m.starts_with("movem")
+        || m.starts_with("adda")
+        || m.starts_with("suba")
+        || m.starts_with("cmpa") && false
+    {
+        return Ccr::Keeps;
+    }
+    if ["lea", "pea", "link", "linkw", "unlk", "exg", "nop", "trap"].contains(&m) {
+        return Ccr::Keeps;
+    }
+    if m.starts_with("bra")
+        || m.starts_with("bsr")
+        || m.starts_with("jmp")
+        || m.starts_with("jsr")
+        || m.starts_with("rt")
+        || m.starts_with("db")
+    {
+        return Ccr::Flow;
+    }
+    if (m.starts_with("addq") || m.starts_with("subq")) && to_areg {
+        return Ccr::Keeps;
+    }
+    if m.starts_with("move")
+        && (ops.contains("%sr") || ops.contains("%ccr") || ops.contains("%usp"))
+    {
+        return Ccr::Keeps;
+    }
+    if m.starts_with("move") && to_areg {
+        return Ccr::Keeps; // objdump may print movea as movel to an address register
+    }
+    if m.starts_with("move") || m.starts_with("clr") {
+        return Ccr::Move;
+    }
+    if reads_ccr(mn) && m.starts_with('s') {
+        return Ccr::Keeps; // Scc reads but does not set
+    }
+    const OPS: [&str; 26] = [
+        "add", "sub", "cmp", "tst", "and", "or", "eor", "not", "neg", "ext", "swap", "lsl", "lsr",
+        "asl", "asr", "rol", "ror", "roxl", "roxr", "mul", "div", "btst", "bset", "bclr", "bchg",
+        "tas",
+    ];
+    if OPS.iter().any(|o| m.starts_with(o))
+        || m.starts_with("cas")
+        || m.starts_with("chk")
+        || m.starts_with("bf")
+    {
+        return Ccr::Op;
+    }
+    Ccr::Keeps
+}
+
+/// Scans `objdump -d --no-show-raw-insn` output.
+pub fn scan(disassembly: &str) -> Vec<Hit> {
+    let mut hits = Vec::new();
+    let mut function = String::new();
+    let mut run: Vec<(String, String)> = Vec::new();
+    for line in disassembly.lines() {
+        if let Some(name) = line
+            .strip_suffix(">:")
+            .and_then(|l| l.split_once(" <"))
+            .map(|(_, n)| n)
+        {
+            function = name.to_string();
+            run.clear();
+            continue;
+        }
+        let Some((addr, rest)) = line.trim_start().split_once(":\t") else {
+            if line.trim().is_empty() {
+                run.clear();
+            }
+            continue;
+        };
+        let Ok(addr) = u32::from_str_radix(addr.trim(), 16) else {
+            continue;
+        };
+        let rest = rest.trim();
+        let (mn, ops) = rest.split_once(char::is_whitespace).unwrap_or((rest, ""));
+        if reads_ccr(mn) {
+            for (pm, po) in run.iter().rev() {
+                match classify(pm, po) {
+                    Ccr::Move => {
+                        hits.push(Hit {
+                            function: function.clone(),
+                            branch_addr: addr,
+                            branch: rest.to_string(),
+                            clobber: format!("{pm} {po}"),
+                        });
+                        break;
+                    }
+                    Ccr::Op | Ccr::Flow => break,
+                    Ccr::Keeps => {}
+                }
+            }
+        }
+        if classify(mn, ops) == Ccr::Flow && !reads_ccr(mn) {
+            run.clear();
+        } else {
+            run.push((mn.to_string(), ops.to_string()));
+        }
+    }
+    hits
+}
+
+/// Whether a hit lies in code the firmware never executes ([`NEVER_EXECUTED`]).
+pub fn tolerated(hit: &Hit) -> bool {
+    NEVER_EXECUTED.iter().any(|n| hit.function.contains(n))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BAD: &str = "00000ed6 <memcpy>:\n     ed4:\tsubl %d1,%d4\n     ed6:\tmovel %d3,%d4\n     ed8:\tblss ec2 <memcpy+0x3c>\n";
+
+    #[test]
+    fn a_move_between_compare_and_branch_is_found() {
+        let h = scan(BAD);
+        assert_eq!(h.len(), 1);
+        assert_eq!(h[0].function, "memcpy");
+        assert_eq!(h[0].branch_addr, 0xed8);
+        assert!(h[0].clobber.starts_with("movel"));
+        assert!(!tolerated(&h[0]));
+    }
+
+    #[test]
+    fn flag_neutral_instructions_between_are_fine() {
+        let ok = "00000100 <f>:\n 100:\tcmpil #0,%d7\n 106:\tmoveal %d1,%a5\n 108:\tmoveml %fp@(-4),%d2\n 10c:\tlea %fp@(-2),%a0\n 110:\tbeqs 120 <f+0x20>\n";
+        assert!(scan(ok).is_empty());
+        let addq = "00000100 <f>:\n 100:\tsubl #1,%d0\n 102:\taddql #4,%a0\n 104:\tbnes 100 <f>\n";
+        assert!(scan(addq).is_empty());
+        let tst = "00000100 <f>:\n 100:\tmovel %d1,%d0\n 102:\ttstl %d0\n 104:\tbnes 100 <f>\n";
+        assert!(scan(tst).is_empty());
+    }
+
+    #[test]
+    fn straight_line_code_ends_at_calls_and_labels() {
+        let call = "00000100 <f>:\n 100:\tmovel %d1,%d0\n 102:\tjsr 200 <g>\n 108:\tbeqs 100 <f>\n";
+        assert!(scan(call).is_empty());
+        let scc = "00000100 <f>:\n 100:\tcmpl %d1,%d0\n 102:\tmoveq #0,%d2\n 104:\tseq %d3\n";
+        assert_eq!(scan(scc).len(), 1, "Scc reads the flags too");
+    }
+
+    #[test]
+    fn hits_in_formatting_code_are_tolerated() {
+        let fmt = BAD.replace("<memcpy>", "<_RNvNtCshnA4rcpSRlJ_4core3fmt5write>");
+        let h = scan(&fmt);
+        assert_eq!(h.len(), 1);
+        assert!(tolerated(&h[0]));
+    }
+}

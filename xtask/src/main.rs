@@ -1,0 +1,186 @@
+//! `cargo xtask`: the project's build tasks (design.md section 8).
+//!
+//! * `cargo xtask images [--out DIR]`: builds the five board images for the 68020 and writes
+//!   `<board>.elf`, `<board>.s19` (Motorola S-record) and `<board>.bin` (raw, loaded at 0)
+//!   to `target/images/` (or DIR), checks that each S-record and binary load back to the same
+//!   bytes as the ELF, and prints a size table against the 1 MiB of local RAM.
+//! * `cargo xtask test`: images, then every test of the workspace, formatting and clippy.
+
+mod ccr;
+
+use sim_host::image::{Image, LOCAL_RAM_SIZE};
+use sim_host::IMAGE_NAMES;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+/// Firmware target triple.
+const TARGET: &str = "m68k-unknown-none-elf";
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .canonicalize()
+        .expect("workspace root")
+}
+
+fn cargo() -> Command {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root());
+    c
+}
+
+fn run(mut c: Command) -> Result<(), String> {
+    let shown = format!("{c:?}");
+    let st = c.status().map_err(|e| format!("cannot run {shown}: {e}"))?;
+    if st.success() {
+        Ok(())
+    } else {
+        Err(format!("failed ({st}): {shown}"))
+    }
+}
+
+fn images(out: &Path) -> Result<(), String> {
+    let mut c = cargo();
+    c.args(["build", "--release", "--target", TARGET])
+        .args(["-Zbuild-std=core,compiler_builtins"]);
+    for b in IMAGE_NAMES {
+        c.args([
+            "-p",
+            &format!("board-{b}"),
+            "--features",
+            &format!("board-{b}/image"),
+        ]);
+    }
+    run(c)?;
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let built = root().join("target").join(TARGET).join("release");
+    println!(
+        "{:<8} {:>8} {:>8} {:>8} {:>9} {:>7}  files",
+        "board", "text", "data", "bss", "total", "of 1MiB"
+    );
+    for b in IMAGE_NAMES {
+        let elf = out.join(format!("{b}.elf"));
+        std::fs::copy(built.join(b), &elf).map_err(|e| format!("copy {b}: {e}"))?;
+        for (fmt, ext) in [("srec", "s19"), ("binary", "bin")] {
+            let mut c = Command::new("m68k-linux-gnu-objcopy");
+            c.args(["-O", fmt]);
+            if fmt == "srec" {
+                c.arg("--srec-forceS3");
+            }
+            c.arg(&elf).arg(out.join(format!("{b}.{ext}")));
+            run(c).map_err(|e| format!("{e}\n(is binutils-m68k-linux-gnu installed?)"))?;
+        }
+        check_ccr(&elf)?;
+        let img = Image::load(&elf).map_err(|e| e.to_string())?;
+        for ext in ["s19", "bin"] {
+            let other = Image::load(&out.join(format!("{b}.{ext}"))).map_err(|e| e.to_string())?;
+            if other.to_ram() != img.to_ram() {
+                return Err(format!(
+                    "{b}.{ext} does not load to the same bytes as {b}.elf"
+                ));
+            }
+        }
+        let s = img.sizes.unwrap_or_default();
+        let total = s.text + s.data + s.bss;
+        println!(
+            "{:<8} {:>8} {:>8} {:>8} {:>9} {:>6.2}%  {b}.elf {b}.s19 {b}.bin",
+            b,
+            s.text,
+            s.data,
+            s.bss,
+            total,
+            100.0 * total as f64 / LOCAL_RAM_SIZE as f64
+        );
+    }
+    println!("wrote {} files to {}", 3 * IMAGE_NAMES.len(), out.display());
+    Ok(())
+}
+
+/// Refuses an image with the CCR-clobber miscompile outside code it never executes.
+fn check_ccr(elf: &Path) -> Result<(), String> {
+    let out = Command::new("m68k-linux-gnu-objdump")
+        .args(["-d", "--no-show-raw-insn"])
+        .arg(elf)
+        .output()
+        .map_err(|e| {
+            format!("cannot run m68k-linux-gnu-objdump: {e} (install binutils-m68k-linux-gnu)")
+        })?;
+    if !out.status.success() {
+        return Err(format!(
+            "m68k-linux-gnu-objdump failed on {}",
+            elf.display()
+        ));
+    }
+    let hits = ccr::scan(&String::from_utf8_lossy(&out.stdout));
+    let fatal: Vec<_> = hits.iter().filter(|h| !ccr::tolerated(h)).collect();
+    if fatal.is_empty() {
+        return Ok(());
+    }
+    let mut msg = format!(
+        "{}: LLVM placed a flag-clobbering move between a compare and its branch ({} sites; docs/toolchain.md):",
+        elf.display(),
+        fatal.len()
+    );
+    for h in fatal {
+        msg += &format!(
+            "\n  {:#07x} in {}: `{}` before `{}`",
+            h.branch_addr, h.function, h.clobber, h.branch
+        );
+    }
+    Err(msg)
+}
+
+fn test() -> Result<(), String> {
+    images(&root().join("target/images"))?;
+    let mut c = cargo();
+    c.args(["fmt", "--all", "--check"]);
+    run(c)?;
+    let mut c = cargo();
+    c.args([
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ]);
+    run(c)?;
+    let mut c = cargo();
+    c.args(["test", "--workspace"]);
+    run(c)
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let r = match args.first().map(String::as_str) {
+        Some("images") => {
+            let out = match args.get(1).map(String::as_str) {
+                Some("--out") => match args.get(2) {
+                    Some(d) => PathBuf::from(d),
+                    None => {
+                        eprintln!("xtask: --out needs a directory");
+                        return ExitCode::from(2);
+                    }
+                },
+                Some(other) => {
+                    eprintln!("xtask: unknown argument {other:?}");
+                    return ExitCode::from(2);
+                }
+                None => root().join("target/images"),
+            };
+            images(&out)
+        }
+        Some("test") => test(),
+        _ => {
+            eprintln!("usage: cargo xtask images [--out DIR] | cargo xtask test");
+            return ExitCode::from(2);
+        }
+    };
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
