@@ -151,7 +151,7 @@ impl Image {
             ));
         }
         let pc = self.read_u32(4).unwrap_or(0);
-        if pc >= LOCAL_RAM_SIZE || pc % 2 != 0 {
+        if pc >= LOCAL_RAM_SIZE || !pc.is_multiple_of(2) {
             return Err(err(format!(
                 "reset vector {pc:#010x} is not an even address in local RAM"
             )));
@@ -378,7 +378,7 @@ impl SRecord {
         }
         let kind = b[1] - b'0';
         let hex = &line[2..];
-        if hex.len() % 2 != 0 {
+        if !hex.len().is_multiple_of(2) {
             return Err("odd number of hex digits".into());
         }
         let mut bytes = Vec::with_capacity(hex.len() / 2);

@@ -4,10 +4,12 @@
 //! * [`emu`]: a board's real image on an emulated 68020 and the bus it sees.
 //! * [`devices`]: the boards' private I/O at register level.
 //! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
+//! * [`docs`]: the generated tables of the memory-map and register documents.
 #![deny(missing_docs)]
 
 pub mod boot;
 pub mod devices;
+pub mod docs;
 pub mod emu;
 pub mod image;
 

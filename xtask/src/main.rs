@@ -4,7 +4,9 @@
 //!   `<board>.elf`, `<board>.s19` (Motorola S-record) and `<board>.bin` (raw, loaded at 0)
 //!   to `target/images/` (or DIR), checks that each S-record and binary load back to the same
 //!   bytes as the ELF, and prints a size table against the 1 MiB of local RAM.
-//! * `cargo xtask test`: images, then every test of the workspace, formatting and clippy.
+//! * `cargo xtask docs`: rewrites the generated tables of `docs/memory-map.md` and
+//!   `docs/registers.md` from the code.
+//! * `cargo xtask test`: images, then formatting, clippy and every test of the workspace.
 
 mod ccr;
 
@@ -96,6 +98,23 @@ fn images(out: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// Rewrites the generated tables of `docs/memory-map.md` and `docs/registers.md`.
+fn docs() -> Result<(), String> {
+    for (name, block) in [
+        ("memory-map.md", sim_host::docs::memory_map()),
+        ("registers.md", sim_host::docs::registers()),
+    ] {
+        let path = root().join("docs").join(name);
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let new = sim_host::docs::splice(&text, &block)
+            .ok_or_else(|| format!("{}: no generated-block markers", path.display()))?;
+        std::fs::write(&path, new).map_err(|e| format!("{}: {e}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
 /// Refuses an image with the CCR-clobber miscompile outside code it never executes.
 fn check_ccr(elf: &Path) -> Result<(), String> {
     let out = Command::new("m68k-linux-gnu-objdump")
@@ -146,8 +165,43 @@ fn test() -> Result<(), String> {
     ]);
     run(c)?;
     let mut c = cargo();
-    c.args(["test", "--workspace"]);
-    run(c)
+    c.args(["test", "--workspace"])
+        .stdout(std::process::Stdio::piped());
+    let mut child = c
+        .spawn()
+        .map_err(|e| format!("cannot run cargo test: {e}"))?;
+    let (mut passed, mut failed) = (0u64, 0u64);
+    let stdout = child.stdout.take().expect("piped");
+    for line in std::io::BufRead::lines(std::io::BufReader::new(stdout)) {
+        let line = line.map_err(|e| e.to_string())?;
+        println!("{line}");
+        if let Some(rest) = line.strip_prefix("test result: ") {
+            let count = |word: &str| -> u64 {
+                rest.split(';')
+                    .find_map(|p| {
+                        p.trim().strip_suffix(word).map(|n| {
+                            n.trim()
+                                .trim_start_matches("ok.")
+                                .trim_start_matches("FAILED.")
+                                .trim()
+                                .parse()
+                                .unwrap_or(0)
+                        })
+                    })
+                    .unwrap_or(0)
+            };
+            passed += count(" passed");
+            failed += count(" failed");
+        }
+    }
+    let st = child.wait().map_err(|e| e.to_string())?;
+    // One closing line for the whole workspace (cargo's last line is often an empty doc-test run).
+    println!("workspace: {passed} passed, {failed} failed");
+    if st.success() && failed == 0 {
+        Ok(())
+    } else {
+        Err(format!("cargo test failed ({st})"))
+    }
 }
 
 fn main() -> ExitCode {
@@ -171,8 +225,11 @@ fn main() -> ExitCode {
             images(&out)
         }
         Some("test") => test(),
+        Some("docs") => docs(),
         _ => {
-            eprintln!("usage: cargo xtask images [--out DIR] | cargo xtask test");
+            eprintln!(
+                "usage: cargo xtask images [--out DIR] | cargo xtask docs | cargo xtask test"
+            );
             return ExitCode::from(2);
         }
     };

@@ -39,7 +39,10 @@ impl<'a> ArrayBus<'a> {
 
 impl GlobalBus for ArrayBus<'_> {
     fn read_u32(&mut self, off: u32) -> u32 {
-        debug_assert!(off % 4 == 0, "misaligned global RAM read at {off:#x}");
+        debug_assert!(
+            off.is_multiple_of(4),
+            "misaligned global RAM read at {off:#x}"
+        );
         let o = off as usize;
         u32::from_be_bytes([
             self.mem[o],
@@ -49,7 +52,10 @@ impl GlobalBus for ArrayBus<'_> {
         ])
     }
     fn write_u32(&mut self, off: u32, val: u32) {
-        debug_assert!(off % 4 == 0, "misaligned global RAM write at {off:#x}");
+        debug_assert!(
+            off.is_multiple_of(4),
+            "misaligned global RAM write at {off:#x}"
+        );
         let o = off as usize;
         self.mem[o..o + 4].copy_from_slice(&val.to_be_bytes());
     }

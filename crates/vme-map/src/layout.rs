@@ -258,7 +258,7 @@ const fn check_layout() {
     let mut i = 0;
     while i < LAYOUT.len() {
         let r = LAYOUT[i];
-        assert!(r.offset % 4 == 0, "every region is word aligned");
+        assert!(r.offset.is_multiple_of(4), "every region is word aligned");
         assert!(
             r.offset + r.size <= GLOBAL_RAM_SIZE,
             "every region lies in global RAM"

@@ -39,6 +39,8 @@ impl Word for i32 {
 pub trait Record: Sized {
     /// Number of 32-bit words in the record.
     const WORDS: u32;
+    /// Names of the words in order (for the memory-map documentation).
+    const FIELDS: &'static [&'static str];
     /// Writes word `i` (0-based) of the record through `put(i, word)`.
     fn encode(&self, put: &mut dyn FnMut(u32, u32));
     /// Builds the record from `get(i)`, which returns word `i`.
@@ -64,6 +66,7 @@ macro_rules! record {
 
         impl $crate::record::Record for $name {
             const WORDS: u32 = [$(stringify!($field)),+].len() as u32;
+            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),+];
             fn encode(&self, put: &mut dyn FnMut(u32, u32)) {
                 let mut _i = 0u32;
                 $(
@@ -108,7 +111,7 @@ impl<R: Record> SeqLock<R> {
 
     /// The slot at byte offset `off` of global RAM (4-byte aligned).
     pub const fn at(off: u32) -> Self {
-        assert!(off % 4 == 0, "seqlock slots are word aligned");
+        assert!(off.is_multiple_of(4), "seqlock slots are word aligned");
         Self {
             off,
             _r: PhantomData,

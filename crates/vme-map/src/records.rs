@@ -24,6 +24,8 @@ record! {
     }
 }
 
+const _: () = assert!(ObjectTable::FIELDS.len() as u32 == ObjectTable::WORDS);
+
 /// Bits of [`Beacon::flags`].
 pub mod beacon_flags {
     /// The position is valid (sum signal in range, not saturated).
@@ -62,6 +64,13 @@ pub struct ObjectTable {
 
 impl Record for ObjectTable {
     const WORDS: u32 = 1 + BEACONS as u32 * Beacon::WORDS;
+    const FIELDS: &'static [&'static str] = &[
+        "frame", "b0.x_um", "b0.y_um", "b0.t_us", "b0.flags", "b1.x_um", "b1.y_um", "b1.t_us",
+        "b1.flags", "b2.x_um", "b2.y_um", "b2.t_us", "b2.flags", "b3.x_um", "b3.y_um", "b3.t_us",
+        "b3.flags", "b4.x_um", "b4.y_um", "b4.t_us", "b4.flags", "b5.x_um", "b5.y_um", "b5.t_us",
+        "b5.flags", "b6.x_um", "b6.y_um", "b6.t_us", "b6.flags", "b7.x_um", "b7.y_um", "b7.t_us",
+        "b7.flags",
+    ];
     fn encode(&self, put: &mut dyn FnMut(u32, u32)) {
         put(0, self.frame);
         for (b, beacon) in self.beacons.iter().enumerate() {
