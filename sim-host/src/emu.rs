@@ -10,6 +10,9 @@
 //! | `0x0100_0000..0x0180_0000` | global RAM, shared with the other boards and the host |
 //! | anything else | bus error |
 //!
+//! No 68881 is fitted: the images use software floating point, and a coprocessor instruction
+//! takes the line-F exception (vector 11).
+//!
 //! Traps the core surfaces instead of taking (illegal instruction, A-line, F-line, TRAP,
 //! BKPT) are taken as the hardware would, through the image's vector table.
 
@@ -189,6 +192,10 @@ impl EmuBoard {
     pub fn new(id: BoardId, image: &Image, io: Box<dyn Device>, global: &mut [u8]) -> Self {
         let mut cpu = CpuCore::new();
         cpu.set_cpu_type(CpuType::M68020);
+        // The images use software floating point (rustc emits no 68881 code; design.md
+        // section 6), so the boards are modelled without a coprocessor: a stray 68881
+        // instruction takes the line-F exception instead of running on absent hardware.
+        cpu.fpu_present = false;
         let mut b = Self {
             id,
             cpu,

@@ -80,3 +80,35 @@ fn memcpy_memmove_memset_memcmp_match_the_host() {
     assert_eq!(cmp(&mut b, &mut g, 2), 0);
     assert!(cmp(&mut b, &mut g, 4) < 0);
 }
+
+#[test]
+fn the_critical_section_masks_and_restores_interrupts() {
+    let (mut b, img, mut g) = board();
+    let f = |n: &str| img.symbol(n).unwrap_or_else(|| panic!("{n} not in image"));
+    b.cpu.set_sr(0x2300);
+    let (old, _) = b.call(&mut g, f("__rt_sr_mask_all"), &[], 1000).unwrap();
+    assert_eq!(old, 0x2300);
+    assert_eq!(b.cpu.get_sr() & 0x0700, 0x0700, "mask raised to 7");
+    b.call(&mut g, f("__rt_sr_restore"), &[0x2300], 1000)
+        .unwrap();
+    // The system byte (supervisor bit, interrupt mask) is the contract; the condition codes
+    // are not preserved across calls in the C ABI.
+    assert_eq!(b.cpu.get_sr() & 0xFF00, 0x2300);
+    b.call(&mut g, f("__rt_sr_restore"), &[0x2700], 1000)
+        .unwrap();
+    assert_eq!(b.cpu.get_sr() & 0xFF00, 0x2700);
+}
+
+#[test]
+fn cas_swaps_only_when_the_word_matches() {
+    let (mut b, img, mut g) = board();
+    let cas = img.symbol("__vme_cas32").expect("__vme_cas32");
+    let addr = vme_map::GLOBAL_RAM_BASE + 0x800;
+    g[0x800..0x804].copy_from_slice(&7u32.to_be_bytes());
+    let (found, _) = b.call(&mut g, cas, &[addr, 7, 9], 1000).unwrap();
+    assert_eq!(found, 7);
+    assert_eq!(u32::from_be_bytes(g[0x800..0x804].try_into().unwrap()), 9);
+    let (found, _) = b.call(&mut g, cas, &[addr, 7, 11], 1000).unwrap();
+    assert_eq!(found, 9, "no swap: the word was 9");
+    assert_eq!(u32::from_be_bytes(g[0x800..0x804].try_into().unwrap()), 9);
+}

@@ -52,8 +52,8 @@ _exception:
     .section .text.__rt_sr, "ax"
     .globl __rt_sr_mask_all
 __rt_sr_mask_all:               /* u32 __rt_sr_mask_all(void): old SR, mask raised to 7 */
-    moveq   #0, %d0
-    move.w  %sr, %d0
+    move.w  %sr, %d0            /* first, so the value is the SR at the call */
+    andi.l  #0xffff, %d0
     ori.w   #0x0700, %sr
     rts
     .globl __rt_sr_restore
