@@ -1,0 +1,250 @@
+//! The arm's outline in the plane and its exact clearance to disk obstacles (thesis ch. II
+//! fig. II.3 and the region radii of ch. IV, lines 1036-1042).
+//!
+//! Angles are absolute (referenced to ground, thesis ch. II): link 1 points along `theta1`
+//! from the shoulder at the origin, link 2 along `theta2` from the elbow. The outline is a
+//! union of rectangles and disks fixed in a link's frame (`s` along the link, `t` across):
+//!
+//! | part | shape | extent |
+//! |---|---|---|
+//! | shoulder hub | disk about the shoulder | r = 3.8 cm (region I: every configuration) |
+//! | link 1 body | rectangle | s = 0..27.5 cm, 3.8 cm wide |
+//! | link 2 front | rectangle | s = 0..25 cm from the elbow, 1.9 cm tube |
+//! | link 2 tip | disk | centre 25 cm from the elbow, r = 1.5 cm (reach 51.5 cm) |
+//! | link 2 tail | rectangle | s = -13..0 cm, 1.9 cm tube |
+//! | counterweight | disk | centre -11.75 cm, r = 1.25 cm (tail reach 13 cm: 12-38 cm band) |
+//!
+//! The C-space issue derives the exact outline used for the transforms from this one; the
+//! simulator's collision oracle uses this one, exactly.
+
+/// Shoulder-to-elbow length.
+pub const L1_M: f64 = 0.25;
+/// Elbow-to-tip-centre length.
+pub const L2_M: f64 = 0.25;
+
+/// One part of the outline, in its link's frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Part {
+    /// A disk centred at `s_m` along the link.
+    Disk {
+        /// Centre along the link from the link's joint.
+        s_m: f64,
+        /// Radius.
+        r_m: f64,
+    },
+    /// A rectangle from `s0_m` to `s1_m` along the link, `half_width_m` either side.
+    Rect {
+        /// Start along the link.
+        s0_m: f64,
+        /// End along the link.
+        s1_m: f64,
+        /// Half the width across the link.
+        half_width_m: f64,
+    },
+}
+
+/// Which body a part belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Body {
+    /// Fixed to ground at the shoulder.
+    Ground,
+    /// Link 1 (frame at the shoulder, along theta1).
+    Link1,
+    /// Link 2 (frame at the elbow, along theta2).
+    Link2,
+}
+
+/// The arm's outline.
+pub const OUTLINE: [(Body, Part); 6] = [
+    (
+        Body::Ground,
+        Part::Disk {
+            s_m: 0.0,
+            r_m: 0.038,
+        },
+    ),
+    (
+        Body::Link1,
+        Part::Rect {
+            s0_m: 0.0,
+            s1_m: 0.275,
+            half_width_m: 0.019,
+        },
+    ),
+    (
+        Body::Link2,
+        Part::Rect {
+            s0_m: 0.0,
+            s1_m: L2_M,
+            half_width_m: 0.0095,
+        },
+    ),
+    (
+        Body::Link2,
+        Part::Disk {
+            s_m: L2_M,
+            r_m: 0.015,
+        },
+    ),
+    (
+        Body::Link2,
+        Part::Rect {
+            s0_m: -0.13,
+            s1_m: 0.0,
+            half_width_m: 0.0095,
+        },
+    ),
+    (
+        Body::Link2,
+        Part::Disk {
+            s_m: -0.1175,
+            r_m: 0.0125,
+        },
+    ),
+];
+
+/// A disk obstacle in the plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disk {
+    /// Centre x.
+    pub x_m: f64,
+    /// Centre y.
+    pub y_m: f64,
+    /// Radius.
+    pub r_m: f64,
+}
+
+/// Where the elbow is.
+pub fn elbow(theta1_rad: f64) -> (f64, f64) {
+    (L1_M * libm::cos(theta1_rad), L1_M * libm::sin(theta1_rad))
+}
+
+/// Where the tip centre is.
+pub fn tip(theta1_rad: f64, theta2_rad: f64) -> (f64, f64) {
+    let (ex, ey) = elbow(theta1_rad);
+    (
+        ex + L2_M * libm::cos(theta2_rad),
+        ey + L2_M * libm::sin(theta2_rad),
+    )
+}
+
+/// Distance from point `(px, py)` in a frame at `(ox, oy)` rotated by `angle` to `part`
+/// (0 inside).
+fn part_distance(part: Part, ox: f64, oy: f64, angle: f64, px: f64, py: f64) -> f64 {
+    let (c, s) = (libm::cos(angle), libm::sin(angle));
+    let (dx, dy) = (px - ox, py - oy);
+    let along = dx * c + dy * s;
+    let across = -dx * s + dy * c;
+    match part {
+        Part::Disk { s_m, r_m } => (libm::hypot(along - s_m, across) - r_m).max(0.0),
+        Part::Rect {
+            s0_m,
+            s1_m,
+            half_width_m,
+        } => {
+            let ds = if along < s0_m {
+                s0_m - along
+            } else if along > s1_m {
+                along - s1_m
+            } else {
+                0.0
+            };
+            let dt = (libm::fabs(across) - half_width_m).max(0.0);
+            libm::hypot(ds, dt)
+        }
+    }
+}
+
+/// Clearance between the arm at (`theta1_rad`, `theta2_rad`) and `disk`: the distance
+/// between the disk and the nearest part of the outline, negative or zero when they touch
+/// or overlap (a collision).
+pub fn clearance_m(theta1_rad: f64, theta2_rad: f64, disk: &Disk) -> f64 {
+    let (ex, ey) = elbow(theta1_rad);
+    let mut best = f64::INFINITY;
+    for (body, part) in OUTLINE {
+        let (ox, oy, a) = match body {
+            Body::Ground => (0.0, 0.0, 0.0),
+            Body::Link1 => (0.0, 0.0, theta1_rad),
+            Body::Link2 => (ex, ey, theta2_rad),
+        };
+        let d = part_distance(part, ox, oy, a, disk.x_m, disk.y_m) - disk.r_m;
+        if d < best {
+            best = d;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn kinematics_in_absolute_angles() {
+        let (x, y) = tip(0.0, FRAC_PI_2);
+        assert!((x - 0.25).abs() < 1e-12 && (y - 0.25).abs() < 1e-12);
+        let (x, y) = tip(PI, PI);
+        assert!((x + 0.5).abs() < 1e-12 && y.abs() < 1e-12);
+    }
+
+    #[test]
+    fn reach_and_regions_match_chapter_iv() {
+        // Beyond 51.5 cm nothing can be hit (region VI).
+        let far = Disk {
+            x_m: 0.516,
+            y_m: 0.0,
+            r_m: 0.0,
+        };
+        assert!(clearance_m(0.0, 0.0, &far) > 0.0);
+        let edge = Disk {
+            x_m: 0.514,
+            y_m: 0.0,
+            r_m: 0.0,
+        };
+        assert!(
+            clearance_m(0.0, 0.0, &edge) <= 0.0,
+            "the tip reaches 51.5 cm"
+        );
+        // Inside 3.8 cm everything collides (region I), whatever the angles.
+        for k in 0..16 {
+            let a = k as f64 * PI / 8.0;
+            let near = Disk {
+                x_m: 0.03 * libm::cos(a + 1.0),
+                y_m: 0.03 * libm::sin(a + 1.0),
+                r_m: 0.0,
+            };
+            assert!(clearance_m(a, -a, &near) <= 0.0);
+        }
+        // The tail reaches 13 cm behind the elbow: 38 cm from the shoulder when straight.
+        let tail = Disk {
+            x_m: 0.379,
+            y_m: 0.0,
+            r_m: 0.0,
+        };
+        assert!(clearance_m(0.0, PI, &tail) <= 0.0);
+        assert!(
+            clearance_m(
+                0.0,
+                PI,
+                &Disk {
+                    x_m: 0.381,
+                    y_m: 0.0,
+                    r_m: 0.0
+                }
+            ) > 0.0
+        );
+    }
+
+    #[test]
+    fn clearance_is_exact_for_a_disk_beside_link_2() {
+        // Link 2 along +y from the elbow at (0.25, 0): a disk at 10 cm up, 5 cm to the side.
+        let d = Disk {
+            x_m: 0.30,
+            y_m: 0.10,
+            r_m: 0.01,
+        };
+        let c = clearance_m(0.0, FRAC_PI_2, &d);
+        assert!((c - (0.05 - 0.0095 - 0.01)).abs() < 1e-12, "{c}");
+    }
+}
