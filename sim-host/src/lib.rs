@@ -4,6 +4,7 @@
 //! * [`emu`]: a board's real image on an emulated 68020 and the bus it sees.
 //! * [`devices`]: the boards' private I/O at register level.
 //! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
+//! * [`plant`]: the arm: amplifiers, motors, bands with their resonance, friction.
 //! * [`docs`]: the generated tables of the memory-map and register documents.
 #![deny(missing_docs)]
 
@@ -12,6 +13,7 @@ pub mod devices;
 pub mod docs;
 pub mod emu;
 pub mod image;
+pub mod plant;
 
 /// Names of the five board images, as built by `cargo xtask images`.
 pub const IMAGE_NAMES: [&str; 5] = ["sensing", "cspace", "servo", "reflex", "planner"];
