@@ -3,7 +3,6 @@
 //! reset together; then they run asynchronously, each on its own emulated 68020, meeting
 //! only in global RAM.
 
-use crate::devices::PrivateIo;
 use crate::emu::{EmuBoard, RunState, CPU_HZ};
 use crate::image::{Image, ImageError};
 use std::path::{Path, PathBuf};
@@ -68,7 +67,7 @@ impl System {
             out.push(EmuBoard::new(
                 b,
                 &image,
-                Box::new(PrivateIo::for_board(b)),
+                crate::devices::standalone(b),
                 &mut global,
             ));
         }

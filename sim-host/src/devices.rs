@@ -1,45 +1,45 @@
-//! The boards' private I/O at register level (design.md section 7, "Devices").
+//! The boards' private I/O at register level (design.md section 7, "Devices"), behind the
+//! register tables of `crates/regs`. An access to an offset a board's table does not list, or
+//! in a direction it does not allow, is not decoded: the CPU takes a bus error.
 //!
-//! [`PrivateIo`] decodes a board's register table from the `regs` crate: an access to an
-//! offset the table does not list, or in a direction it does not allow, is not decoded and
-//! the CPU takes a bus error. Every board has its board-ID switch; the servo board's 2 MHz
-//! free-running counter counts from the board's CPU cycles. Other registers latch what was
-//! written until the device models of the simulator issue (encoders, DACs and amplifiers,
-//! LED driver, A/D converters) are attached behind the same table.
+//! * [`ServoIo`]: two 16-bit quadrature counters on the motors with a common latch; the 2 MHz
+//!   16-bit free-running counter; two 12-bit DACs (+-10 V) into the amplifiers, gated by the
+//!   amplifier enables; current-limit status.
+//! * [`SensingIo`]: the LED strobe driver and the A/D converters (x, y, sum), with conversion
+//!   time, busy and end-of-conversion flags, 12-bit offset-binary codes and over-range flags,
+//!   fed by an [`Optics`] model (the seam for the sensing issue's optical model).
+//! * [`IdOnly`]: the boards with no private I/O but their board-ID switch.
+//!
+//! Device time is CPU cycles at [`CPU_HZ`] in both simulator modes.
 
 use crate::emu::{Device, CPU_HZ};
+use regs::sensing::LedCtrl;
+use regs::servo::AmpCtrl;
 use regs::{decodes, Register};
 use vme_map::BoardId;
 
-/// The private I/O block of one board.
-pub struct PrivateIo {
-    table: &'static [Register],
-    switch: u16,
-    timer: bool,
-    latches: Vec<(u32, u16)>,
+/// Seconds at CPU cycle `now`.
+pub fn seconds(now: u64) -> f64 {
+    now as f64 / CPU_HZ as f64
 }
 
-impl PrivateIo {
-    /// The private I/O of `board`: the servo and sensing boards have their register tables;
-    /// the others decode only the board-ID switch.
-    pub fn for_board(board: BoardId) -> Self {
-        let (table, timer): (&'static [Register], bool) = match board {
-            BoardId::Servo => (&regs::servo::REGISTERS, true),
-            BoardId::Sensing => (&regs::sensing::REGISTERS, false),
-            _ => (&ID_ONLY, false),
-        };
-        let switch = match board {
-            BoardId::Cspace1 => 1,
-            BoardId::Cspace2 => 2,
-            _ => 0,
-        };
-        Self {
-            table,
-            switch,
-            timer,
-            latches: Vec::new(),
-        }
+/// The 2 MHz counter's value at CPU cycle `now`.
+pub fn timer_at(now: u64) -> u16 {
+    (now as u128 * regs::servo::TIMER_HZ as u128 / CPU_HZ as u128) as u16
+}
+
+/// The board-ID switch setting of a board.
+pub fn switch_of(board: BoardId) -> u16 {
+    match board {
+        BoardId::Cspace1 => 1,
+        BoardId::Cspace2 => 2,
+        _ => 0,
     }
+}
+
+/// The private I/O of a board with none but its board-ID switch.
+pub struct IdOnly {
+    switch: u16,
 }
 
 static ID_ONLY: [Register; 1] = [Register {
@@ -48,72 +48,432 @@ static ID_ONLY: [Register; 1] = [Register {
     access: regs::Access::R,
 }];
 
-/// The 2 MHz counter's value at CPU cycle `now`.
-pub fn timer_at(now: u64) -> u16 {
-    (now as u128 * regs::servo::TIMER_HZ as u128 / CPU_HZ as u128) as u16
+impl IdOnly {
+    /// The switch of `board`.
+    pub fn new(board: BoardId) -> Self {
+        Self {
+            switch: switch_of(board),
+        }
+    }
 }
 
-impl Device for PrivateIo {
+impl Device for IdOnly {
+    fn read16(&mut self, off: u32, _now: u64) -> Option<u16> {
+        decodes(&ID_ONLY, off, false).then_some(self.switch)
+    }
+    fn write16(&mut self, _off: u32, _val: u16, _now: u64) -> bool {
+        false
+    }
+}
+
+/// What the servo board's I/O sees of one motor: its angle (referred to the link) and
+/// velocity at time `t_s`, from which the counter extrapolates to the access time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotorSample {
+    /// Motor angle referred to the link.
+    pub angle_rad: f64,
+    /// Motor velocity referred to the link.
+    pub rate_rad_s: f64,
+    /// When sampled.
+    pub t_s: f64,
+}
+
+/// The servo board's private I/O.
+pub struct ServoIo {
+    /// Motor states, updated by the simulator every plant step.
+    pub motors: [MotorSample; 2],
+    /// Amplifier current-limit flags, updated by the simulator.
+    pub limit: [bool; 2],
+    rad_per_count: [f64; 2],
+    offset_counts: [i64; 2],
+    latched: [u16; 2],
+    dac: [i16; 2],
+    amp: AmpCtrl,
+}
+
+impl ServoIo {
+    /// The servo I/O with encoders reading 0 at the motors' angles `zero_rad`.
+    pub fn new(zero_rad: [f64; 2]) -> Self {
+        let rpc = [arm::LINK1.rad_per_count(), arm::LINK2.rad_per_count()];
+        let mut io = Self {
+            motors: [MotorSample::default(); 2],
+            limit: [false; 2],
+            rad_per_count: rpc,
+            offset_counts: [0; 2],
+            latched: [0; 2],
+            dac: [0; 2],
+            amp: AmpCtrl::empty(),
+        };
+        for i in 0..2 {
+            io.offset_counts[i] = (zero_rad[i] / rpc[i]).floor() as i64;
+        }
+        io
+    }
+
+    /// The encoder count of motor `i` at CPU cycle `now` (unwrapped).
+    pub fn counts(&self, i: usize, now: u64) -> i64 {
+        let m = self.motors[i];
+        let a = m.angle_rad + m.rate_rad_s * (seconds(now) - m.t_s);
+        (a / self.rad_per_count[i]).floor() as i64 - self.offset_counts[i]
+    }
+
+    /// The amplifier command volts: the DAC output while enabled, 0 V otherwise.
+    pub fn amp_volts(&self) -> [f64; 2] {
+        let en = [
+            self.amp.contains(AmpCtrl::ENABLE0),
+            self.amp.contains(AmpCtrl::ENABLE1),
+        ];
+        let full = regs::servo::DAC_FULL_SCALE_MV as f64 / 1000.0;
+        [0, 1].map(|i| {
+            if en[i] {
+                self.dac[i] as f64 * full / 2048.0
+            } else {
+                0.0
+            }
+        })
+    }
+}
+
+impl Device for ServoIo {
     fn read16(&mut self, off: u32, now: u64) -> Option<u16> {
-        if !decodes(self.table, off, false) {
+        use regs::servo::*;
+        if !decodes(&REGISTERS, off, false) {
             return None;
         }
         Some(match off {
-            regs::BOARD_ID => self.switch,
-            regs::servo::TIMER if self.timer => timer_at(now),
-            _ => self
-                .latches
-                .iter()
-                .find(|(o, _)| *o == off)
-                .map_or(0, |(_, v)| *v),
+            regs::BOARD_ID => 0,
+            ENC0 => self.latched[0],
+            ENC1 => self.latched[1],
+            TIMER => timer_at(now),
+            AMP_CTRL => self.amp.bits(),
+            AMP_STATUS => {
+                let mut s = AmpStatus::empty();
+                s.set(AmpStatus::LIMIT0, self.limit[0]);
+                s.set(AmpStatus::LIMIT1, self.limit[1]);
+                s.bits()
+            }
+            _ => 0,
         })
     }
 
-    fn write16(&mut self, off: u32, val: u16, _now: u64) -> bool {
-        if !decodes(self.table, off, true) {
+    fn write16(&mut self, off: u32, val: u16, now: u64) -> bool {
+        use regs::servo::*;
+        if !decodes(&REGISTERS, off, true) {
             return false;
         }
-        match self.latches.iter_mut().find(|(o, _)| *o == off) {
-            Some(l) => l.1 = val,
-            None => self.latches.push((off, val)),
+        match off {
+            ENC_CTRL => {
+                let c = EncCtrl::from_bits_truncate(val);
+                for (i, reset) in [(0, EncCtrl::RESET0), (1, EncCtrl::RESET1)] {
+                    if c.contains(reset) {
+                        self.offset_counts[i] += self.counts(i, now);
+                    }
+                }
+                if c.contains(EncCtrl::LATCH) {
+                    // Both counters in the same clock; 16-bit counters wrap.
+                    self.latched = [self.counts(0, now) as u16, self.counts(1, now) as u16];
+                }
+            }
+            DAC0 => self.dac[0] = dac_code(val),
+            DAC1 => self.dac[1] = dac_code(val),
+            AMP_CTRL => self.amp = AmpCtrl::from_bits_truncate(val),
+            _ => {}
         }
         true
+    }
+}
+
+/// The analog front end's output for the selected beacon: what the A/D converters sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Analog {
+    /// X position signal, volts (the converter spans -10..+10 V).
+    pub x_v: f64,
+    /// Y position signal, volts.
+    pub y_v: f64,
+    /// Sum (intensity) signal, volts.
+    pub sum_v: f64,
+    /// LED drive current read-back, mA.
+    pub led_ma: f64,
+}
+
+/// The optical sensor seen from the sensing board's converters (lateral-effect photodiode,
+/// lens, analog sum/difference/divide). The sensing issue supplies the full model; the
+/// simulator's worlds implement it.
+pub trait Optics {
+    /// The analog signals at time `t_s` with beacon `beacon` selected and its LED `on`.
+    fn sample(&mut self, beacon: u8, on: bool, t_s: f64) -> Analog;
+}
+
+/// A/D conversion time (a 12-bit successive-approximation converter of the period, 25 us).
+pub const ADC_CONVERSION_S: f64 = 25e-6;
+/// A/D input span: -10..+10 V.
+pub const ADC_SPAN_V: f64 = 10.0;
+
+/// The sensing board's private I/O.
+pub struct SensingIo<O: Optics> {
+    /// The optical model behind the converters.
+    pub optics: O,
+    select: u8,
+    led: LedCtrl,
+    started: Option<u64>,
+    held: Analog,
+    ever: bool,
+}
+
+impl<O: Optics> SensingIo<O> {
+    /// The sensing I/O over `optics`.
+    pub fn new(optics: O) -> Self {
+        Self {
+            optics,
+            select: 0,
+            led: LedCtrl::empty(),
+            started: None,
+            held: Analog::default(),
+            ever: false,
+        }
+    }
+
+    fn done(&self, now: u64) -> bool {
+        self.started
+            .is_some_and(|t| seconds(now) - seconds(t) >= ADC_CONVERSION_S)
+    }
+}
+
+/// The 12-bit offset-binary code of `v` and whether it was beyond the span.
+pub fn adc_code(v: f64) -> (u16, bool) {
+    let c = ((v + ADC_SPAN_V) / (2.0 * ADC_SPAN_V) * 4096.0).floor();
+    if c < 0.0 {
+        (0, true)
+    } else if c > 4095.0 {
+        (4095, true)
+    } else {
+        (c as u16, false)
+    }
+}
+
+impl<O: Optics> Device for SensingIo<O> {
+    fn read16(&mut self, off: u32, now: u64) -> Option<u16> {
+        use regs::sensing::*;
+        if !decodes(&REGISTERS, off, false) {
+            return None;
+        }
+        let done = self.done(now);
+        Some(match off {
+            regs::BOARD_ID => 0,
+            LED_CTRL => self.led.bits(),
+            LED_CURRENT => {
+                let on = self.led.contains(LedCtrl::ENABLE);
+                self.optics
+                    .sample(self.select, on, seconds(now))
+                    .led_ma
+                    .round()
+                    .clamp(0.0, 65535.0) as u16
+            }
+            ADC_STATUS => {
+                let mut s = AdcStatus::empty();
+                if self.started.is_some() && !done {
+                    s |= AdcStatus::BUSY;
+                }
+                if done {
+                    s |= AdcStatus::EOC;
+                    s.set(AdcStatus::OVER_X, adc_code(self.held.x_v).1);
+                    s.set(AdcStatus::OVER_Y, adc_code(self.held.y_v).1);
+                    s.set(AdcStatus::OVER_SUM, adc_code(self.held.sum_v).1);
+                }
+                s.bits()
+            }
+            // Data registers read the last completed conversion (0 before the first).
+            ADC_X | ADC_Y | ADC_SUM if done || self.ever => {
+                let v = match off {
+                    ADC_X => self.held.x_v,
+                    ADC_Y => self.held.y_v,
+                    _ => self.held.sum_v,
+                };
+                adc_code(v).0
+            }
+            _ => 0,
+        })
+    }
+
+    fn write16(&mut self, off: u32, val: u16, now: u64) -> bool {
+        use regs::sensing::*;
+        if !decodes(&REGISTERS, off, true) {
+            return false;
+        }
+        match off {
+            LED_SELECT => self.select = (val & 7) as u8,
+            LED_CTRL => self.led = LedCtrl::from_bits_truncate(val),
+            ADC_CTRL if AdcCtrl::from_bits_truncate(val).contains(AdcCtrl::START) => {
+                // Track-and-hold at the start of conversion.
+                let on = self.led.contains(LedCtrl::ENABLE);
+                self.held = self.optics.sample(self.select, on, seconds(now));
+                self.started = Some(now);
+                self.ever = true;
+            }
+            _ => {}
+        }
+        true
+    }
+}
+
+/// The private I/O of `board` for image-mode boots with no world attached: the servo I/O
+/// with motors at rest at 0, the sensing I/O with dark optics (no beacon lit).
+pub fn standalone(board: BoardId) -> Box<dyn Device> {
+    match board {
+        BoardId::Servo => Box::new(ServoIo::new([0.0; 2])),
+        BoardId::Sensing => Box::new(SensingIo::new(Dark)),
+        b => Box::new(IdOnly::new(b)),
+    }
+}
+
+/// Optics with nothing lit: every signal 0 V.
+pub struct Dark;
+
+impl Optics for Dark {
+    fn sample(&mut self, _beacon: u8, _on: bool, _t_s: f64) -> Analog {
+        Analog::default()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use regs::sensing as sn;
+    use regs::sensing::AdcStatus;
+    use regs::servo as sv;
+    use regs::servo::{AmpStatus, EncCtrl};
+
+    const MS: u64 = CPU_HZ / 1000;
 
     #[test]
     fn undecoded_and_wrong_direction_accesses_are_refused() {
-        let mut io = PrivateIo::for_board(BoardId::Servo);
+        let mut io = ServoIo::new([0.0; 2]);
         assert_eq!(io.read16(regs::UNDECODED_PROBE, 0), None);
-        assert_eq!(io.read16(regs::servo::DAC0, 0), None, "DACs are write-only");
-        assert!(
-            !io.write16(regs::servo::TIMER, 1, 0),
-            "the timer is read-only"
-        );
-        assert!(io.write16(regs::servo::AMP_CTRL, 3, 0));
-        assert_eq!(io.read16(regs::servo::AMP_CTRL, 0), Some(3));
-        let mut planner = PrivateIo::for_board(BoardId::Planner);
-        assert_eq!(planner.read16(regs::servo::TIMER, 0), None);
+        assert_eq!(io.read16(sv::DAC0, 0), None, "DACs are write-only");
+        assert!(!io.write16(sv::TIMER, 1, 0), "the timer is read-only");
+        assert!(io.write16(sv::AMP_CTRL, 3, 0));
+        assert_eq!(io.read16(sv::AMP_CTRL, 0), Some(3));
+        let mut planner = IdOnly::new(BoardId::Planner);
+        assert_eq!(planner.read16(sv::TIMER, 0), None);
         assert_eq!(planner.read16(regs::BOARD_ID, 0), Some(0));
         assert_eq!(
-            PrivateIo::for_board(BoardId::Cspace2).read16(regs::BOARD_ID, 0),
+            IdOnly::new(BoardId::Cspace2).read16(regs::BOARD_ID, 0),
             Some(2)
         );
+        let mut s = SensingIo::new(Dark);
+        assert_eq!(
+            s.read16(sn::LED_SELECT, 0),
+            None,
+            "LED select is write-only"
+        );
+        assert!(!s.write16(sn::ADC_X, 0, 0));
     }
 
     #[test]
     fn the_timer_counts_at_2_mhz_and_wraps() {
-        let mut io = PrivateIo::for_board(BoardId::Servo);
-        let t = |io: &mut PrivateIo, c| io.read16(regs::servo::TIMER, c).unwrap();
+        let mut io = ServoIo::new([0.0; 2]);
+        let t = |io: &mut ServoIo, c| io.read16(sv::TIMER, c).unwrap();
         assert_eq!(t(&mut io, 0), 0);
-        assert_eq!(t(&mut io, CPU_HZ / 1000), 2000, "1 ms is 2000 counts");
-        // 32.768 ms = 65536 counts: back to 0.
+        assert_eq!(t(&mut io, MS), 2000, "1 ms is 2000 counts");
         let wrap = (CPU_HZ * 65536).div_ceil(2_000_000);
         assert_eq!(t(&mut io, wrap), 0);
-        assert_eq!(t(&mut io, wrap + CPU_HZ / 1000), 2000);
+        assert_eq!(t(&mut io, wrap + MS), 2000);
+    }
+
+    #[test]
+    fn encoders_latch_together_count_in_quadrature_and_wrap_at_16_bits() {
+        let mut io = ServoIo::new([0.0; 2]);
+        // Link 1: 32768 counts per link revolution; link 2: 8192.
+        io.motors = [
+            MotorSample {
+                angle_rad: std::f64::consts::TAU / 4.0,
+                rate_rad_s: 0.0,
+                t_s: 0.0,
+            },
+            MotorSample {
+                angle_rad: -std::f64::consts::TAU / 8.0,
+                rate_rad_s: 0.0,
+                t_s: 0.0,
+            },
+        ];
+        // Nothing changes until the latch.
+        assert_eq!(io.read16(sv::ENC0, 0), Some(0));
+        assert!(io.write16(sv::ENC_CTRL, EncCtrl::LATCH.bits(), 0));
+        assert_eq!(io.read16(sv::ENC0, 0), Some(8192));
+        assert_eq!(io.read16(sv::ENC1, 0), Some((-1024i16) as u16));
+        // Extrapolated to the access time: 1 rad/s for 1 ms on link 2 = 1.304 counts.
+        io.motors[1] = MotorSample {
+            angle_rad: 0.0,
+            rate_rad_s: 1.0,
+            t_s: 0.0,
+        };
+        io.write16(sv::ENC_CTRL, EncCtrl::LATCH.bits(), MS);
+        assert_eq!(io.read16(sv::ENC1, 0), Some(1));
+        // Two and a quarter link revolutions of link 1 = 73728 counts: wraps to 8192.
+        io.motors[0].angle_rad = std::f64::consts::TAU * 2.25;
+        io.write16(sv::ENC_CTRL, EncCtrl::LATCH.bits(), 0);
+        assert_eq!(io.read16(sv::ENC0, 0), Some(8192));
+        // Reset clears a counter.
+        io.write16(sv::ENC_CTRL, (EncCtrl::RESET0 | EncCtrl::LATCH).bits(), 0);
+        assert_eq!(io.read16(sv::ENC0, 0), Some(0));
+    }
+
+    #[test]
+    fn dacs_drive_the_amplifiers_only_when_enabled() {
+        let mut io = ServoIo::new([0.0; 2]);
+        io.write16(sv::DAC0, 1024, 0);
+        io.write16(sv::DAC1, (-2048i16 as u16) & 0x0FFF, 0);
+        assert_eq!(io.amp_volts(), [0.0, 0.0], "amplifiers disabled at reset");
+        io.write16(
+            sv::AMP_CTRL,
+            (AmpCtrl::ENABLE0 | AmpCtrl::ENABLE1).bits(),
+            0,
+        );
+        assert_eq!(io.amp_volts(), [5.0, -10.0]);
+        io.limit = [false, true];
+        assert_eq!(io.read16(sv::AMP_STATUS, 0), Some(AmpStatus::LIMIT1.bits()));
+    }
+
+    struct Lit;
+    impl Optics for Lit {
+        fn sample(&mut self, beacon: u8, on: bool, _t: f64) -> Analog {
+            if on {
+                Analog {
+                    x_v: beacon as f64,
+                    y_v: -12.0,
+                    sum_v: 5.0,
+                    led_ma: 500.0,
+                }
+            } else {
+                Analog::default()
+            }
+        }
+    }
+
+    #[test]
+    fn the_adc_converts_after_its_conversion_time_and_flags_over_range() {
+        let mut s = SensingIo::new(Lit);
+        let st = |s: &mut SensingIo<Lit>, now| {
+            AdcStatus::from_bits_truncate(s.read16(sn::ADC_STATUS, now).unwrap())
+        };
+        assert!(st(&mut s, 0).is_empty(), "idle before the first start");
+        s.write16(sn::LED_SELECT, 3, 0);
+        s.write16(sn::LED_CTRL, LedCtrl::ENABLE.bits(), 0);
+        assert_eq!(s.read16(sn::LED_CURRENT, 0), Some(500));
+        s.write16(sn::ADC_CTRL, regs::sensing::AdcCtrl::START.bits(), 100);
+        let conv = (ADC_CONVERSION_S * CPU_HZ as f64).ceil() as u64;
+        assert_eq!(st(&mut s, 100 + conv - 1), AdcStatus::BUSY);
+        let done = st(&mut s, 100 + conv);
+        assert!(done.contains(AdcStatus::EOC) && !done.contains(AdcStatus::BUSY));
+        assert!(done.contains(AdcStatus::OVER_Y) && !done.contains(AdcStatus::OVER_X));
+        assert_eq!(s.read16(sn::ADC_X, 100 + conv), Some(adc_code(3.0).0));
+        assert_eq!(
+            s.read16(sn::ADC_Y, 100 + conv),
+            Some(0),
+            "-12 V saturates at code 0"
+        );
+        assert_eq!(adc_code(0.0).0, 2048);
+        assert_eq!(adc_code(9.999).0, 4095);
+        assert_eq!(adc_code(10.0), (4095, true));
     }
 }

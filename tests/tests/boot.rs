@@ -98,7 +98,7 @@ fn a_board_waits_for_the_global_ram_header_and_says_why() {
     sys.global[..16].fill(0);
     // Reset the board against the empty header.
     let img = Image::load(&images_dir().join("planner.elf")).unwrap();
-    let io = Box::new(sim_host::devices::PrivateIo::for_board(BoardId::Planner));
+    let io = sim_host::devices::standalone(BoardId::Planner);
     sys.boards[0] = sim_host::emu::EmuBoard::new(BoardId::Planner, &img, io, &mut sys.global);
     sys.run_ms(2.0);
     assert_eq!(sys.heartbeat(BoardId::Planner), 0);

@@ -1,6 +1,5 @@
 //! Firmware functions called one at a time on the emulated 68020, against host references.
 
-use sim_host::devices::PrivateIo;
 use sim_host::emu::EmuBoard;
 use sim_host::image::Image;
 use system_tests::images_dir;
@@ -12,7 +11,7 @@ fn board() -> (EmuBoard, Image, Vec<u8>) {
     let b = EmuBoard::new(
         BoardId::Reflex,
         &img,
-        Box::new(PrivateIo::for_board(BoardId::Reflex)),
+        sim_host::devices::standalone(BoardId::Reflex),
         &mut global,
     );
     (b, img, global)
