@@ -45,6 +45,7 @@ pub enum Part {
 
 /// Which body a part belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(usize)]
 pub enum Body {
     /// Fixed to ground at the shoulder.
     Ground,
@@ -128,30 +129,92 @@ pub fn tip(theta1_rad: f64, theta2_rad: f64) -> (f64, f64) {
     )
 }
 
-/// Distance from point `(px, py)` in a frame at `(ox, oy)` rotated by `angle` to `part`
-/// (0 inside).
-fn part_distance(part: Part, ox: f64, oy: f64, angle: f64, px: f64, py: f64) -> f64 {
-    let (c, s) = (libm::cos(angle), libm::sin(angle));
-    let (dx, dy) = (px - ox, py - oy);
-    let along = dx * c + dy * s;
-    let across = -dx * s + dy * c;
-    match part {
-        Part::Disk { s_m, r_m } => (libm::hypot(along - s_m, across) - r_m).max(0.0),
-        Part::Rect {
-            s0_m,
-            s1_m,
-            half_width_m,
-        } => {
-            let ds = if along < s0_m {
-                s0_m - along
-            } else if along > s1_m {
-                along - s1_m
-            } else {
-                0.0
-            };
-            let dt = (libm::fabs(across) - half_width_m).max(0.0);
-            libm::hypot(ds, dt)
+/// A frame in the plane: origin and direction cosines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Frame {
+    ox: f64,
+    oy: f64,
+    c: f64,
+    s: f64,
+}
+
+impl Frame {
+    /// Distance from `(px, py)` to `part` in this frame (0 inside).
+    fn distance(&self, part: Part, px: f64, py: f64) -> f64 {
+        let (dx, dy) = (px - self.ox, py - self.oy);
+        let along = dx * self.c + dy * self.s;
+        let across = -dx * self.s + dy * self.c;
+        match part {
+            Part::Disk { s_m, r_m } => (libm::hypot(along - s_m, across) - r_m).max(0.0),
+            Part::Rect {
+                s0_m,
+                s1_m,
+                half_width_m,
+            } => {
+                let ds = if along < s0_m {
+                    s0_m - along
+                } else if along > s1_m {
+                    along - s1_m
+                } else {
+                    0.0
+                };
+                let dt = (libm::fabs(across) - half_width_m).max(0.0);
+                libm::hypot(ds, dt)
+            }
         }
+    }
+}
+
+/// The arm in one configuration, with its trigonometry done once, for checking many
+/// obstacles (the simulator checks every obstacle at every plant step).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    frames: [Frame; 3],
+}
+
+impl Pose {
+    /// The arm at absolute angles (`theta1_rad`, `theta2_rad`).
+    pub fn new(theta1_rad: f64, theta2_rad: f64) -> Self {
+        let (s1, c1) = (libm::sin(theta1_rad), libm::cos(theta1_rad));
+        let (s2, c2) = (libm::sin(theta2_rad), libm::cos(theta2_rad));
+        let (ex, ey) = (L1_M * c1, L1_M * s1);
+        Self {
+            frames: [
+                Frame {
+                    ox: 0.0,
+                    oy: 0.0,
+                    c: 1.0,
+                    s: 0.0,
+                },
+                Frame {
+                    ox: 0.0,
+                    oy: 0.0,
+                    c: c1,
+                    s: s1,
+                },
+                Frame {
+                    ox: ex,
+                    oy: ey,
+                    c: c2,
+                    s: s2,
+                },
+            ],
+        }
+    }
+
+    /// Clearance to `disk`: distance to the nearest part of the outline minus the disk's
+    /// radius; zero or negative when they touch or overlap (a collision). It bottoms out at
+    /// minus the radius once the disk's centre is inside the outline.
+    pub fn clearance_m(&self, disk: &Disk) -> f64 {
+        let mut best = f64::INFINITY;
+        for (body, part) in OUTLINE {
+            let f = &self.frames[body as usize];
+            let d = f.distance(part, disk.x_m, disk.y_m) - disk.r_m;
+            if d < best {
+                best = d;
+            }
+        }
+        best
     }
 }
 
@@ -159,20 +222,7 @@ fn part_distance(part: Part, ox: f64, oy: f64, angle: f64, px: f64, py: f64) -> 
 /// between the disk and the nearest part of the outline, negative or zero when they touch
 /// or overlap (a collision).
 pub fn clearance_m(theta1_rad: f64, theta2_rad: f64, disk: &Disk) -> f64 {
-    let (ex, ey) = elbow(theta1_rad);
-    let mut best = f64::INFINITY;
-    for (body, part) in OUTLINE {
-        let (ox, oy, a) = match body {
-            Body::Ground => (0.0, 0.0, 0.0),
-            Body::Link1 => (0.0, 0.0, theta1_rad),
-            Body::Link2 => (ex, ey, theta2_rad),
-        };
-        let d = part_distance(part, ox, oy, a, disk.x_m, disk.y_m) - disk.r_m;
-        if d < best {
-            best = d;
-        }
-    }
-    best
+    Pose::new(theta1_rad, theta2_rad).clearance_m(disk)
 }
 
 #[cfg(test)]

@@ -1,0 +1,699 @@
+//! The deterministic simulation in native mode (design.md sections 3, 5 and 7).
+//!
+//! The boards' own code (each board crate's I/O shell and logic) runs on the host at each
+//! board's rate and seeded phase, asynchronously. Boards meet only in a simulated global
+//! RAM laid out by `vme-map`, the same bytes the images see. Their private I/O goes through
+//! the same register protocol and the same device models as image mode. The plant integrates
+//! at a fixed step, and the collision oracle checks the arm's true outline against every
+//! obstacle at every step.
+//!
+//! Order within one plant step `[t, t + dt)`: the devices see the plant's state at `t` (the
+//! encoders extrapolate it to each access); every board due before `t + dt` runs, in order of
+//! its activation time (ties by board index); then the plant advances with the amplifier
+//! commands the DACs hold (sampled every `dt`, well inside the amplifier's 106 us lag); then
+//! the collision oracle runs. A seed fixes every random choice, so a run is bit-identical.
+
+use crate::devices::{Analog, IdOnly, MotorSample, Optics, SensingIo, ServoIo};
+use crate::emu::{Device, CPU_HZ};
+use crate::plant::{Plant, DEFAULT_DT_S};
+use arm::geometry::{Disk, Pose};
+use regs::IoBus;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use vme_map::{ArrayBus, BoardId, FaultCode, FaultRecord, GlobalBus, GLOBAL_RAM_SIZE};
+
+/// SplitMix64: a small, fast, seedable generator; the simulation's only source of randomness.
+#[derive(Clone, Debug)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// A generator for `seed`.
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// How an obstacle moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Motion {
+    /// It stays where it is.
+    Static,
+    /// Constant velocity.
+    Line {
+        /// Velocity x.
+        vx_m_s: f64,
+        /// Velocity y.
+        vy_m_s: f64,
+    },
+    /// Around a circle through its start point, centred at (`cx_m`, `cy_m`).
+    Circle {
+        /// Centre x.
+        cx_m: f64,
+        /// Centre y.
+        cy_m: f64,
+        /// Seconds per revolution (negative: clockwise).
+        period_s: f64,
+    },
+}
+
+/// A disk obstacle with its scripted motion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Obstacle {
+    /// Where it is at t = 0 (and its radius).
+    pub start: Disk,
+    /// How it moves.
+    pub motion: Motion,
+}
+
+impl Obstacle {
+    /// Where it is at `t_s`.
+    pub fn at(&self, t_s: f64) -> Disk {
+        let d = self.start;
+        match self.motion {
+            Motion::Static => d,
+            Motion::Line { vx_m_s, vy_m_s } => Disk {
+                x_m: d.x_m + vx_m_s * t_s,
+                y_m: d.y_m + vy_m_s * t_s,
+                ..d
+            },
+            Motion::Circle {
+                cx_m,
+                cy_m,
+                period_s,
+            } => {
+                let (dx, dy) = (d.x_m - cx_m, d.y_m - cy_m);
+                let a = std::f64::consts::TAU * t_s / period_s;
+                let (s, c) = a.sin_cos();
+                Disk {
+                    x_m: cx_m + dx * c - dy * s,
+                    y_m: cy_m + dx * s + dy * c,
+                    ..d
+                }
+            }
+        }
+    }
+}
+
+/// The wand (the goal) along a piecewise-linear path of (t, x, y) points.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WandPath {
+    /// Points in time order; before the first and after the last the wand rests.
+    pub points: Vec<(f64, f64, f64)>,
+}
+
+impl WandPath {
+    /// Where the wand is at `t_s`, if there is a wand.
+    pub fn at(&self, t_s: f64) -> Option<(f64, f64)> {
+        let p = &self.points;
+        let first = p.first()?;
+        if t_s <= first.0 {
+            return Some((first.1, first.2));
+        }
+        for w in p.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            if t_s <= b.0 {
+                let f = if b.0 > a.0 {
+                    (t_s - a.0) / (b.0 - a.0)
+                } else {
+                    1.0
+                };
+                return Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2)));
+            }
+        }
+        let last = p.last()?;
+        Some((last.1, last.2))
+    }
+}
+
+/// The board rates of the standard system, native mode: main-loop period per board.
+pub const DEFAULT_PERIODS_S: [(BoardId, f64); 5] = [
+    (BoardId::Sensing, 250e-6), // one beacon per pass: 8 beacons at 500 Hz (thesis ch. II.3)
+    (BoardId::Cspace0, 1e-3),
+    (BoardId::Servo, 1.0 / 3000.0),
+    (BoardId::Reflex, 1e-3),
+    (BoardId::Planner, 1e-3),
+];
+
+/// Everything a run is made from (a scenario file supplies it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Fixes every random choice.
+    pub seed: u64,
+    /// Simulated seconds.
+    pub duration_s: f64,
+    /// Plant step.
+    pub dt_s: f64,
+    /// Start angles (absolute, rad), at rest.
+    pub start_rad: [f64; 2],
+    /// Obstacles (beacons 0..=4 and the instructional robot, beacon 7).
+    pub obstacles: Vec<Obstacle>,
+    /// The wand's path (beacon 6).
+    pub wand: WandPath,
+    /// Boards and their main-loop periods.
+    pub boards: Vec<(BoardId, f64)>,
+    /// Faults to inject.
+    pub faults: Vec<Fault>,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            duration_s: 1.0,
+            dt_s: DEFAULT_DT_S,
+            start_rad: [0.0, 0.0],
+            obstacles: Vec::new(),
+            wand: WandPath::default(),
+            boards: DEFAULT_PERIODS_S.to_vec(),
+            faults: Vec::new(),
+        }
+    }
+}
+
+/// A fault injected at a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fault {
+    /// When.
+    pub at_s: f64,
+    /// Which board.
+    pub board: BoardId,
+    /// What.
+    pub kind: FaultKind,
+}
+
+/// Kinds of injected faults.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaultKind {
+    /// The board stops running (its heartbeat freezes).
+    Halt,
+    /// The board takes a bus error (the host's fault-injection command).
+    BusError,
+}
+
+/// Ideal optics until the sensing issue's model: each lit beacon's position maps linearly to
+/// +-10 V over +-0.6 m, and the sum signal is 5 V. No noise, no distortion.
+#[derive(Clone, Debug, Default)]
+pub struct IdealOptics {
+    /// Beacon positions (m), `None` when the beacon does not exist.
+    pub beacons: [Option<(f64, f64)>; 8],
+}
+
+impl Optics for IdealOptics {
+    fn sample(&mut self, beacon: u8, on: bool, _t_s: f64) -> Analog {
+        match (on, self.beacons[beacon as usize & 7]) {
+            (true, Some((x, y))) => Analog {
+                x_v: x / 0.6 * 10.0,
+                y_v: y / 0.6 * 10.0,
+                sum_v: 5.0,
+                led_ma: 500.0,
+            },
+            (true, None) => Analog {
+                led_ma: 500.0,
+                ..Default::default()
+            },
+            _ => Analog::default(),
+        }
+    }
+}
+
+/// One board's code, run natively.
+enum Native {
+    Sensing(board_sensing::Board),
+    Cspace(board_cspace::Board),
+    Servo(board_servo::Board),
+    Reflex(board_reflex::Board),
+    Planner(board_planner::Board),
+}
+
+impl Native {
+    fn new(id: BoardId) -> Self {
+        match id {
+            BoardId::Sensing => Native::Sensing(board_sensing::Board::new()),
+            BoardId::Servo => Native::Servo(board_servo::Board::new()),
+            BoardId::Reflex => Native::Reflex(board_reflex::Board::new()),
+            BoardId::Planner => Native::Planner(board_planner::Board::new()),
+            c => Native::Cspace(board_cspace::Board::new(c)),
+        }
+    }
+    fn boot(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
+        match self {
+            Native::Sensing(b) => b.boot(g, io),
+            Native::Cspace(b) => b.boot(g, io),
+            Native::Servo(b) => b.boot(g, io),
+            Native::Reflex(b) => b.boot(g, io),
+            Native::Planner(b) => b.boot(g, io),
+        }
+    }
+    fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
+        match self {
+            Native::Sensing(b) => b.poll(g, io),
+            Native::Cspace(b) => b.poll(g, io),
+            Native::Servo(b) => b.poll(g, io),
+            Native::Reflex(b) => b.poll(g, io),
+            Native::Planner(b) => b.poll(g, io),
+        };
+    }
+}
+
+/// Register access for a native board: the device at the board's current time. An access
+/// the device does not decode is remembered as the board's bus error.
+struct NativeIo<'a> {
+    dev: &'a mut dyn Device,
+    now: u64,
+    bus_error: &'a mut Option<u32>,
+}
+
+impl IoBus for NativeIo<'_> {
+    fn read16(&mut self, off: u32) -> u16 {
+        self.dev.read16(off, self.now).unwrap_or_else(|| {
+            self.bus_error.get_or_insert(off);
+            0xFFFF
+        })
+    }
+    fn write16(&mut self, off: u32, val: u16) {
+        if !self.dev.write16(off, val, self.now) {
+            self.bus_error.get_or_insert(off);
+        }
+    }
+}
+
+/// A board in the schedule.
+struct Slot {
+    id: BoardId,
+    code: Native,
+    own_io: Option<IdOnly>,
+    period_s: f64,
+    next_s: f64,
+    polls: u64,
+    halted: bool,
+}
+
+/// Loop statistics of one board.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoardStats {
+    /// The board.
+    pub board: BoardId,
+    /// Main-loop passes run.
+    pub polls: u64,
+    /// Configured period.
+    pub period_s: f64,
+    /// Whether it was halted by a fault.
+    pub halted: bool,
+}
+
+/// Collision figures from the oracle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Collisions {
+    /// Plant steps with the arm touching or overlapping an obstacle.
+    pub steps: u64,
+    /// Separate contacts (a step in contact after one that was not).
+    pub events: u64,
+    /// Smallest clearance seen (m; negative = penetration).
+    pub min_clearance_m: f64,
+}
+
+/// The whole simulated system.
+pub struct Sim {
+    /// What the run is made from.
+    pub cfg: Config,
+    /// Global RAM (8 MiB), `vme-map` layout.
+    pub global: Vec<u8>,
+    /// The arm.
+    pub plant: Plant,
+    /// The servo board's devices.
+    pub servo_io: ServoIo,
+    /// The sensing board's devices.
+    pub sensing_io: SensingIo<IdealOptics>,
+    slots: Vec<Slot>,
+    faults: Vec<Fault>,
+    /// Plant steps done.
+    pub steps: u64,
+    /// Collision figures so far.
+    pub collisions: Collisions,
+    in_contact: bool,
+}
+
+impl Sim {
+    /// Powers the system up: global RAM cleared with its header, every board booted at a
+    /// seeded phase within its period, the arm at rest at its start angles.
+    pub fn new(cfg: Config) -> Self {
+        let mut rng = Rng::new(cfg.seed);
+        let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+        vme_map::init_header(&mut ArrayBus::new(&mut global));
+        let plant = Plant::new(cfg.start_rad, cfg.dt_s);
+        let servo_io = ServoIo::new(cfg.start_rad);
+        let sensing_io = SensingIo::new(IdealOptics::default());
+        let slots = cfg
+            .boards
+            .iter()
+            .map(|&(id, period_s)| Slot {
+                id,
+                code: Native::new(id),
+                own_io: (!matches!(id, BoardId::Servo | BoardId::Sensing)).then(|| IdOnly::new(id)),
+                period_s,
+                next_s: rng.next_f64() * period_s,
+                polls: 0,
+                halted: false,
+            })
+            .collect();
+        let mut faults = cfg.faults.clone();
+        faults.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        let mut sim = Sim {
+            cfg,
+            global,
+            plant,
+            servo_io,
+            sensing_io,
+            slots,
+            faults,
+            steps: 0,
+            collisions: Collisions {
+                steps: 0,
+                events: 0,
+                min_clearance_m: f64::INFINITY,
+            },
+            in_contact: false,
+        };
+        sim.sync_devices();
+        for i in 0..sim.slots.len() {
+            sim.with_board(i, 0, |code, g, io| code.boot(g, io));
+        }
+        sim
+    }
+
+    /// Simulated time.
+    pub fn t_s(&self) -> f64 {
+        self.steps as f64 * self.cfg.dt_s
+    }
+
+    /// Global RAM as the host sees it.
+    pub fn bus(&mut self) -> ArrayBus<'_> {
+        ArrayBus::new(&mut self.global)
+    }
+
+    /// Runs `f` on board `i`'s code with its global RAM and private I/O at cycle `now`,
+    /// turning an undecoded access or a panic into the fault the image would record.
+    fn with_board(
+        &mut self,
+        i: usize,
+        now: u64,
+        f: impl FnOnce(&mut Native, &mut dyn GlobalBus, &mut NativeIo),
+    ) {
+        let mut bus_error = None;
+        let slot = &mut self.slots[i];
+        let dev: &mut dyn Device = match slot.id {
+            BoardId::Servo => &mut self.servo_io,
+            BoardId::Sensing => &mut self.sensing_io,
+            _ => slot
+                .own_io
+                .as_mut()
+                .expect("boards without their own I/O have the ID switch"),
+        };
+        let mut io = NativeIo {
+            dev,
+            now,
+            bus_error: &mut bus_error,
+        };
+        let mut g = ArrayBus::new(&mut self.global);
+        let r = catch_unwind(AssertUnwindSafe(|| f(&mut slot.code, &mut g, &mut io)));
+        let mut g = ArrayBus::new(&mut self.global);
+        let hb = g.read_u32(vme_map::BoardSlot::of(slot.id).heartbeat());
+        if let Err(p) = r {
+            let msg = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned());
+            let text = format!(
+                "panic: {}",
+                msg.unwrap_or_else(|| "(formatted message)".into())
+            );
+            vme_map::log::LogWriter::new(slot.id).text(&mut g, hb, text.as_bytes());
+            let rec = FaultRecord {
+                code: FaultCode::Panic as u32,
+                heartbeat: hb,
+                ..Default::default()
+            };
+            rt::record_safe_stop(&mut g, slot.id, &rec);
+            slot.halted = true;
+        } else if let Some(off) = bus_error {
+            let rec = FaultRecord {
+                code: FaultCode::BusError as u32,
+                vector: 2,
+                fault_addr: regs::PRIVATE_IO_BASE + off,
+                heartbeat: hb,
+                ..Default::default()
+            };
+            rt::record_safe_stop(&mut g, slot.id, &rec);
+            slot.halted = true;
+        }
+    }
+
+    /// Gives the devices the plant's state and the world's beacons at the current time.
+    fn sync_devices(&mut self) {
+        let t = self.t_s();
+        for (i, l) in self.plant.links.iter().enumerate() {
+            self.servo_io.motors[i] = MotorSample {
+                angle_rad: l.state.motor_rad,
+                rate_rad_s: l.state.motor_rad_s,
+                t_s: t,
+            };
+            self.servo_io.limit[i] = l.state.current_a.abs() >= arm::AMP.current_limit_a * 0.999;
+        }
+        let b = &mut self.sensing_io.optics.beacons;
+        *b = [None; 8];
+        for (k, o) in self.cfg.obstacles.iter().enumerate() {
+            let d = o.at(t);
+            let slot = if k < 5 { k } else { 7 };
+            b[slot] = Some((d.x_m, d.y_m));
+        }
+        let [t1, t2] = self.plant.angles_rad();
+        b[5] = Some(arm::geometry::tip(t1, t2));
+        b[6] = self.cfg.wand.at(t);
+    }
+
+    /// Advances one plant step.
+    pub fn step(&mut self) {
+        let t0 = self.t_s();
+        let t1 = t0 + self.cfg.dt_s;
+        self.sync_devices();
+        while self.faults.first().is_some_and(|f| f.at_s < t1) {
+            let f = self.faults.remove(0);
+            self.inject(f);
+        }
+        // Every board due in this step, in order of activation time (ties: slot order).
+        loop {
+            let next = self
+                .slots
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| !s.halted && s.next_s < t1)
+                .min_by(|a, b| a.1.next_s.total_cmp(&b.1.next_s).then(a.0.cmp(&b.0)))
+                .map(|(i, _)| i);
+            let Some(i) = next else { break };
+            let when = self.slots[i].next_s;
+            let now = (when * CPU_HZ as f64) as u64;
+            self.with_board(i, now, |code, g, io| code.poll(g, io));
+            let s = &mut self.slots[i];
+            s.polls += 1;
+            s.next_s = when + s.period_s;
+        }
+        self.plant.step(self.servo_io.amp_volts());
+        self.steps += 1;
+        self.check_collisions();
+    }
+
+    fn inject(&mut self, f: Fault) {
+        let Some(i) = self.slots.iter().position(|s| s.id == f.board) else {
+            return;
+        };
+        match f.kind {
+            FaultKind::Halt => self.slots[i].halted = true,
+            FaultKind::BusError => {
+                let mut g = self.bus();
+                let serial = vme_map::HOST_COMMAND
+                    .read(&mut g)
+                    .map(|(c, _)| c.serial)
+                    .unwrap_or(0)
+                    + 1;
+                let cmd = vme_map::records::HostCommand {
+                    command: vme_map::records::host_cmd::INJECT_BUS_ERROR,
+                    arg0: f.board.index(),
+                    arg1: 0,
+                    serial,
+                };
+                vme_map::HOST_COMMAND.publish(&mut g, &cmd);
+            }
+        }
+    }
+
+    fn check_collisions(&mut self) {
+        let t = self.t_s();
+        let [a1, a2] = self.plant.angles_rad();
+        let pose = Pose::new(a1, a2);
+        let mut contact = false;
+        for o in &self.cfg.obstacles {
+            let c = pose.clearance_m(&o.at(t));
+            self.collisions.min_clearance_m = self.collisions.min_clearance_m.min(c);
+            contact |= c <= 0.0;
+        }
+        if contact {
+            self.collisions.steps += 1;
+            if !self.in_contact {
+                self.collisions.events += 1;
+            }
+        }
+        self.in_contact = contact;
+    }
+
+    /// Whether the run's duration is over.
+    pub fn done(&self) -> bool {
+        self.t_s() >= self.cfg.duration_s - 1e-12
+    }
+
+    /// Loop statistics of every board.
+    pub fn board_stats(&self) -> Vec<BoardStats> {
+        self.slots
+            .iter()
+            .map(|s| BoardStats {
+                board: s.id,
+                polls: s.polls,
+                period_s: s.period_s,
+                halted: s.halted,
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vme_map::BoardState;
+
+    #[test]
+    fn boards_run_at_their_rates_and_beat() {
+        let mut sim = Sim::new(Config {
+            duration_s: 0.1,
+            ..Default::default()
+        });
+        while !sim.done() {
+            sim.step();
+        }
+        for s in sim.board_stats() {
+            let want = 0.1 / s.period_s;
+            assert!(
+                (s.polls as f64 - want).abs() <= 1.0,
+                "{:?}: {} polls, want {want}",
+                s.board,
+                s.polls
+            );
+            let hb = sim
+                .bus()
+                .read_u32(vme_map::BoardSlot::of(s.board).heartbeat());
+            assert_eq!(hb as u64, s.polls);
+            let st = vme_map::BoardSlot::of(s.board).status_word(&mut sim.bus());
+            assert_eq!(st.state(), Some(BoardState::Running));
+        }
+    }
+
+    #[test]
+    fn an_injected_bus_error_is_recorded_as_the_image_would() {
+        let cfg = Config {
+            duration_s: 0.02,
+            faults: vec![Fault {
+                at_s: 0.01,
+                board: BoardId::Reflex,
+                kind: FaultKind::BusError,
+            }],
+            ..Default::default()
+        };
+        let mut sim = Sim::new(cfg);
+        while !sim.done() {
+            sim.step();
+        }
+        let st = vme_map::BoardSlot::of(BoardId::Reflex).status_word(&mut sim.bus());
+        assert_eq!(st.state(), Some(BoardState::SafeStop));
+        assert_eq!(st.fault(), Some(FaultCode::BusError));
+        let (rec, _) = vme_map::BoardSlot::of(BoardId::Reflex)
+            .fault()
+            .read(&mut sim.bus())
+            .unwrap();
+        assert_eq!(
+            rec.fault_addr,
+            regs::PRIVATE_IO_BASE + regs::UNDECODED_PROBE
+        );
+        assert!(sim
+            .board_stats()
+            .iter()
+            .any(|s| s.board == BoardId::Reflex && s.halted));
+    }
+
+    #[test]
+    fn the_oracle_counts_contacts_with_moving_obstacles() {
+        // Arm straight along +x; a disk sweeps down through link 2 and out again.
+        let o = Obstacle {
+            start: Disk {
+                x_m: 0.4,
+                y_m: 0.1,
+                r_m: 0.01,
+            },
+            motion: Motion::Line {
+                vx_m_s: 0.0,
+                vy_m_s: -1.0,
+            },
+        };
+        let mut sim = Sim::new(Config {
+            duration_s: 0.2,
+            obstacles: vec![o],
+            ..Default::default()
+        });
+        while !sim.done() {
+            sim.step();
+        }
+        assert_eq!(sim.collisions.events, 1);
+        // In contact while |y| <= 0.0095 + 0.01: 0.039 m at 1 m/s = 39 ms = 780 steps.
+        let want = (2.0 * 0.0195 / 1.0 / DEFAULT_DT_S).round() as i64;
+        assert!(
+            (sim.collisions.steps as i64 - want).abs() <= 2,
+            "{} steps, want {want}",
+            sim.collisions.steps
+        );
+        // The centre passed inside link 2: clearance bottoms out at minus the radius.
+        assert!((sim.collisions.min_clearance_m + 0.01).abs() < 1e-12);
+    }
+
+    #[test]
+    fn obstacle_motion_and_wand_path() {
+        let c = Obstacle {
+            start: Disk {
+                x_m: 1.0,
+                y_m: 0.0,
+                r_m: 0.1,
+            },
+            motion: Motion::Circle {
+                cx_m: 0.0,
+                cy_m: 0.0,
+                period_s: 4.0,
+            },
+        };
+        let d = c.at(1.0);
+        assert!(d.x_m.abs() < 1e-12 && (d.y_m - 1.0).abs() < 1e-12);
+        let w = WandPath {
+            points: vec![(0.0, 0.0, 0.0), (1.0, 1.0, 2.0)],
+        };
+        assert_eq!(w.at(-1.0), Some((0.0, 0.0)));
+        assert_eq!(w.at(0.5), Some((0.5, 1.0)));
+        assert_eq!(w.at(9.0), Some((1.0, 2.0)));
+        assert_eq!(WandPath::default().at(0.0), None);
+    }
+}
