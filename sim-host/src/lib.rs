@@ -5,6 +5,7 @@
 //! * [`devices`]: the boards' private I/O at register level.
 //! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
 //! * [`plant`]: the arm: amplifiers, motors, bands with their resonance, friction.
+//! * [`scenario`]: scenario files (TOML) and their errors.
 //! * [`sim`]: the deterministic native-mode simulation: scheduler, world, collision oracle.
 //! * [`docs`]: the generated tables of the memory-map and register documents.
 #![deny(missing_docs)]
@@ -15,6 +16,7 @@ pub mod docs;
 pub mod emu;
 pub mod image;
 pub mod plant;
+pub mod scenario;
 pub mod sim;
 
 /// Names of the five board images, as built by `cargo xtask images`.
