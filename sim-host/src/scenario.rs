@@ -9,7 +9,6 @@ use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
-use vme_map::BoardId;
 
 /// A scenario that could not be used.
 #[derive(Debug, PartialEq)]
@@ -368,6 +367,7 @@ impl Scenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use vme_map::BoardId;
 
     const GOOD: &str = r#"
 name = "test"
