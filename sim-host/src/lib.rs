@@ -1,21 +1,25 @@
 //! The host simulator of the five-board controller (design.md section 7).
 //!
+//! * [`bench`]: measurements of the simulator itself.
 //! * [`image`]: board images (ELF, S-record, binary) and why one is refused.
 //! * [`emu`]: a board's real image on an emulated 68020 and the bus it sees.
 //! * [`devices`]: the boards' private I/O at register level.
 //! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
 //! * [`plant`]: the arm: amplifiers, motors, bands with their resonance, friction.
+//! * [`run`]: a scenario run and its run directory.
 //! * [`scenario`]: scenario files (TOML) and their errors.
 //! * [`sim`]: the deterministic native-mode simulation: scheduler, world, collision oracle.
 //! * [`docs`]: the generated tables of the memory-map and register documents.
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod boot;
 pub mod devices;
 pub mod docs;
 pub mod emu;
 pub mod image;
 pub mod plant;
+pub mod run;
 pub mod scenario;
 pub mod sim;
 

@@ -3,6 +3,8 @@
 use clap::{Parser, Subcommand};
 use sim_host::boot::{boot, default_images_dir, parse_board, FIVE};
 use sim_host::emu::CPU_HZ;
+use sim_host::run::{run_to_dir, RunOptions};
+use sim_host::scenario::Scenario;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vme_map::BoardId;
@@ -17,6 +19,28 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Run a scenario in native mode and write its run directory (trace.csv, summary.json).
+    Run {
+        /// The scenario file (TOML; docs/scenarios.md).
+        scenario: PathBuf,
+        /// Run directory to write.
+        #[arg(long, default_value = "out/run")]
+        out: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+        /// Trace interval in microseconds (a multiple of the plant step).
+        #[arg(long, default_value_t = 1000.0)]
+        trace_every_us: f64,
+    },
+    /// Measure the simulator: `sim` = real-time factor of the five-board native simulation.
+    Bench {
+        /// What to measure (sim).
+        what: String,
+        /// Simulated seconds.
+        #[arg(long, default_value_t = 10.0)]
+        seconds: f64,
+    },
     /// Boot board images on emulated 68020s and print each board's heartbeat and status.
     Boot {
         /// A board name (sensing, cspace, servo, reflex, planner, cspace0..2) or `all`.
@@ -33,6 +57,67 @@ enum Cmd {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.cmd {
+        Cmd::Run {
+            scenario,
+            out,
+            quiet,
+            trace_every_us,
+        } => {
+            let sc = match Scenario::load(&scenario) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("sim-host: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let steps = trace_every_us * 1e-6 / sc.config.dt_s;
+            if !(steps >= 1.0 && (steps - steps.round()).abs() < 1e-6) {
+                eprintln!(
+                    "sim-host: --trace-every-us must be a multiple of the plant step ({} us)",
+                    sc.config.dt_s * 1e6
+                );
+                return ExitCode::from(2);
+            }
+            let opts = RunOptions {
+                trace_every: steps.round() as u64,
+                quiet,
+            };
+            match run_to_dir(&sc, &out, opts) {
+                Ok(s) => {
+                    println!(
+                        "{}: {:.3} s simulated in {:.3} s ({:.0}x real time); collisions {}; min clearance {}; goal {}",
+                        sc.name,
+                        s.duration_s,
+                        s.wall_s,
+                        s.real_time_factor,
+                        s.collisions,
+                        s.min_clearance_m.map_or("-".into(), |c| format!("{:.1} mm", c * 1e3)),
+                        s.goal_reached.map_or("-".into(), |g| if g { "reached".into() } else { format!("not reached ({:.1} mm off)", s.final_goal_error_m.unwrap_or(0.0) * 1e3) })
+                    );
+                    println!(
+                        "wrote {}/trace.csv and {}/summary.json",
+                        out.display(),
+                        out.display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("sim-host: {}: {e}", out.display());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Bench { what, seconds } => match what.as_str() {
+            "sim" => {
+                let r = sim_host::bench::sim(seconds);
+                println!("{r}");
+                ExitCode::SUCCESS
+            }
+            other => {
+                eprintln!("sim-host: unknown benchmark {other:?} (sim)");
+                ExitCode::from(2)
+            }
+        },
         Cmd::Boot { board, images, ms } => {
             let boards: Vec<BoardId> = if board == "all" {
                 FIVE.to_vec()
