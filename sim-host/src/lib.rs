@@ -6,6 +6,7 @@
 //! * [`devices`]: the boards' private I/O at register level.
 //! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
 //! * [`plant`]: the arm: amplifiers, motors, bands with their resonance, friction.
+//! * [`plots`]: PNG pictures of a run.
 //! * [`run`]: a scenario run and its run directory.
 //! * [`scenario`]: scenario files (TOML) and their errors.
 //! * [`sim`]: the deterministic native-mode simulation: scheduler, world, collision oracle.
@@ -19,6 +20,7 @@ pub mod docs;
 pub mod emu;
 pub mod image;
 pub mod plant;
+pub mod plots;
 pub mod run;
 pub mod scenario;
 pub mod sim;

@@ -19,7 +19,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Run a scenario in native mode and write its run directory (trace.csv, summary.json).
+    /// Run a scenario in native mode and write its run directory (trace.csv, summary.json, PNGs).
     Run {
         /// The scenario file (TOML; docs/scenarios.md).
         scenario: PathBuf,
@@ -95,14 +95,13 @@ fn main() -> ExitCode {
                         s.goal_reached.map_or("-".into(), |g| if g { "reached".into() } else { format!("not reached ({:.1} mm off)", s.final_goal_error_m.unwrap_or(0.0) * 1e3) })
                     );
                     println!(
-                        "wrote {}/trace.csv and {}/summary.json",
-                        out.display(),
+                        "wrote trace.csv, summary.json, joints.png and task.png to {}",
                         out.display()
                     );
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
-                    eprintln!("sim-host: {}: {e}", out.display());
+                    eprintln!("sim-host: {e}");
                     ExitCode::FAILURE
                 }
             }

@@ -5,7 +5,9 @@
 //!   any obstacle, the published records (servo state, reflex subgoal, planner goal) and
 //!   every board's heartbeat. Deterministic: the same scenario and seed give the same bytes.
 //! * `summary.json`: the run's figures.
+//! * `joints.png`, `task.png`: pictures of the run (module `plots`).
 
+use crate::plots::Sample;
 use crate::scenario::Scenario;
 use crate::sim::Sim;
 use arm::geometry::Pose;
@@ -158,31 +160,55 @@ pub fn trace_row(sim: &mut Sim, out: &mut String) {
     out.push('\n');
 }
 
+/// The plot sample at the simulation's current time.
+fn sample(sim: &Sim) -> Sample {
+    let l = &sim.plant.links;
+    Sample {
+        t_s: sim.t_s(),
+        theta_rad: [l[0].state.link_rad, l[1].state.link_rad],
+        omega_rad_s: [l[0].state.link_rad_s, l[1].state.link_rad_s],
+        torque_nm: [l[0].motor_torque_nm(), l[1].motor_torque_nm()],
+    }
+}
+
 /// Runs `scenario`; returns the trace text and the summary.
 pub fn run(scenario: &Scenario, opts: RunOptions) -> (String, Summary) {
+    let (trace, summary, _) = run_sampled(scenario, opts);
+    (trace, summary)
+}
+
+/// Runs `scenario`; returns the trace text, the summary and the plot samples.
+pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, Vec<Sample>) {
     let mut sim = Sim::new(scenario.config.clone());
     let total = (scenario.config.duration_s / scenario.config.dt_s).round() as u64;
-    let bar = if opts.quiet || scenario.config.duration_s <= 1.0 {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(total)
-    };
+    // The bar appears only once a run has taken more than a second of wall time.
+    let bar = indicatif::ProgressBar::with_draw_target(
+        Some(total),
+        indicatif::ProgressDrawTarget::hidden(),
+    );
+    let mut shown = false;
     let mut trace = trace_header(&sim);
     let start = Instant::now();
+    let mut samples = vec![sample(&sim)];
     trace_row(&mut sim, &mut trace);
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(opts.trace_every) {
             trace_row(&mut sim, &mut trace);
+            samples.push(sample(&sim));
         }
         if sim.steps.is_multiple_of(2000) {
+            if !opts.quiet && !shown && start.elapsed().as_secs_f64() > 1.0 {
+                bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+                shown = true;
+            }
             bar.set_position(sim.steps);
         }
     }
     bar.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
     let summary = summarize(scenario, &mut sim, wall_s);
-    (trace, summary)
+    (trace, summary, samples)
 }
 
 fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
@@ -228,13 +254,26 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
     }
 }
 
-/// Runs `scenario` and writes `trace.csv` and `summary.json` into `out`.
-pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> std::io::Result<Summary> {
-    std::fs::create_dir_all(out)?;
-    let (trace, summary) = run(scenario, opts);
-    std::fs::write(out.join("trace.csv"), trace)?;
+/// Runs `scenario` and writes `trace.csv`, `summary.json`, `joints.png` and `task.png`
+/// into `out`.
+pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> Result<Summary, String> {
+    let io = |e: std::io::Error| format!("{}: {e}", out.display());
+    std::fs::create_dir_all(out).map_err(io)?;
+    let (trace, summary, samples) = run_sampled(scenario, opts);
+    std::fs::write(out.join("trace.csv"), trace).map_err(io)?;
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
-    std::fs::write(out.join("summary.json"), json + "\n")?;
+    std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;
+    crate::plots::joints(
+        &out.join("joints.png"),
+        &format!("{}: joints", scenario.name),
+        &samples,
+    )?;
+    crate::plots::task(
+        &out.join("task.png"),
+        &format!("{}: task space", scenario.name),
+        &scenario.config,
+        &samples,
+    )?;
     Ok(summary)
 }
 

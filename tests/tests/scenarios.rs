@@ -31,6 +31,13 @@ fn every_shipped_scenario_loads_and_runs_briefly() {
         .unwrap();
         assert_eq!(summary.plant_steps, 1000, "{}", p.display());
         assert!(out.join("trace.csv").exists() && out.join("summary.json").exists());
+        for png in ["joints.png", "task.png"] {
+            let bytes = std::fs::read(out.join(png)).unwrap();
+            assert!(
+                bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.len() > 10_000,
+                "{png} is a picture"
+            );
+        }
         n += 1;
     }
     assert!(n >= 5, "found {n} scenarios");

@@ -1,0 +1,218 @@
+//! PNG pictures of a run: the joint trajectories (like thesis figs. III.3-III.6) and the
+//! task-space picture (arm at start and end, tip path, obstacle paths, wand path).
+//!
+//! Text is drawn with DejaVu Sans from Debian's `fonts-dejavu-core` (installed by `.ci/setup`).
+
+use crate::sim::Config;
+use arm::geometry::{Body, Part, OUTLINE};
+use plotters::prelude::*;
+use std::path::Path;
+
+/// Where the plots' font comes from.
+pub const FONT_PATH: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+/// One sample of the arm for the plots.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Time.
+    pub t_s: f64,
+    /// Link angles.
+    pub theta_rad: [f64; 2],
+    /// Link velocities.
+    pub omega_rad_s: [f64; 2],
+    /// Motor torques at the links.
+    pub torque_nm: [f64; 2],
+}
+
+fn font() -> Result<(), String> {
+    static ONCE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    ONCE.get_or_init(|| {
+        let bytes = std::fs::read(FONT_PATH)
+            .map_err(|e| format!("{FONT_PATH}: {e} (install Debian's fonts-dejavu-core)"))?;
+        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+            .map_err(|_| format!("{FONT_PATH}: not a usable font"))
+    })
+    .clone()
+}
+
+fn err(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+fn range(vals: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in vals {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return 0.0..1.0;
+    }
+    let pad = ((hi - lo) * 0.05).max(1e-3);
+    (lo - pad)..(hi + pad)
+}
+
+/// Picks one plotted quantity of link `i` from a sample.
+type Quantity = fn(&Sample, usize) -> f64;
+
+/// Writes `joints.png`: angles, velocities and torques of both links against time.
+pub fn joints(path: &Path, title: &str, s: &[Sample]) -> Result<(), String> {
+    font()?;
+    let root = BitMapBackend::new(path, (1000, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(err)?;
+    let panes = root.split_evenly((3, 1));
+    let t_end = s.last().map_or(1.0, |x| x.t_s).max(1e-6);
+    let rows: [(&str, Quantity); 3] = [
+        ("angle (rad)", |x, i| x.theta_rad[i]),
+        ("velocity (rad/s)", |x, i| x.omega_rad_s[i]),
+        ("torque (N m)", |x, i| x.torque_nm[i]),
+    ];
+    for (pane, (label, f)) in panes.iter().zip(rows) {
+        let y = range(s.iter().flat_map(|x| [f(x, 0), f(x, 1)]));
+        let mut c = ChartBuilder::on(pane)
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..t_end, y)
+            .map_err(err)?;
+        c.configure_mesh()
+            .x_desc("time (s)")
+            .y_desc(label)
+            .draw()
+            .map_err(err)?;
+        for (i, color) in [(0usize, BLUE), (1, RED)] {
+            c.draw_series(LineSeries::new(s.iter().map(|x| (x.t_s, f(x, i))), color))
+                .map_err(err)?
+                .label(format!("link {}", i + 1))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        }
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(err)?;
+    }
+    root.present().map_err(err)
+}
+
+/// The outline of the arm at `theta` as polygons in the plane.
+fn outline(theta: [f64; 2]) -> Vec<Vec<(f64, f64)>> {
+    let (e, _) = (arm::geometry::elbow(theta[0]), ());
+    let mut out = Vec::new();
+    for (body, part) in OUTLINE {
+        let (ox, oy, a) = match body {
+            Body::Ground => (0.0, 0.0, 0.0),
+            Body::Link1 => (0.0, 0.0, theta[0]),
+            Body::Link2 => (e.0, e.1, theta[1]),
+        };
+        let (c, s) = (a.cos(), a.sin());
+        let pt = |u: f64, v: f64| (ox + u * c - v * s, oy + u * s + v * c);
+        let poly = match part {
+            Part::Disk { s_m, r_m } => (0..=24)
+                .map(|k| {
+                    let w = k as f64 * std::f64::consts::TAU / 24.0;
+                    pt(s_m + r_m * w.cos(), r_m * w.sin())
+                })
+                .collect(),
+            Part::Rect {
+                s0_m,
+                s1_m,
+                half_width_m: h,
+            } => vec![
+                pt(s0_m, -h),
+                pt(s1_m, -h),
+                pt(s1_m, h),
+                pt(s0_m, h),
+                pt(s0_m, -h),
+            ],
+        };
+        out.push(poly);
+    }
+    out
+}
+
+/// Writes `task.png`: the workspace seen from above.
+pub fn task(path: &Path, title: &str, cfg: &Config, s: &[Sample]) -> Result<(), String> {
+    font()?;
+    let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(err)?;
+    let mut c = ChartBuilder::on(&root)
+        .margin(15)
+        .x_label_area_size(35)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-0.6..0.6, -0.6..0.6)
+        .map_err(err)?;
+    c.configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .draw()
+        .map_err(err)?;
+    let t_end = s.last().map_or(0.0, |x| x.t_s);
+    // Obstacles: their path, and the disk at the start (light) and at the end (dark).
+    for o in &cfg.obstacles {
+        let n = 100;
+        let trail: Vec<(f64, f64)> = (0..=n)
+            .map(|k| o.at(t_end * k as f64 / n as f64))
+            .map(|d| (d.x_m, d.y_m))
+            .collect();
+        c.draw_series(LineSeries::new(trail, BLACK.mix(0.3)))
+            .map_err(err)?;
+        for (t, alpha) in [(0.0, 0.25), (t_end, 0.7)] {
+            let d = o.at(t);
+            let ring: Vec<(f64, f64)> = (0..=32)
+                .map(|k| {
+                    let w = k as f64 * std::f64::consts::TAU / 32.0;
+                    (d.x_m + d.r_m * w.cos(), d.y_m + d.r_m * w.sin())
+                })
+                .collect();
+            c.draw_series(std::iter::once(Polygon::new(
+                ring,
+                BLACK.mix(alpha).filled(),
+            )))
+            .map_err(err)?;
+        }
+    }
+    // The wand's path.
+    if !cfg.wand.points.is_empty() {
+        let w: Vec<(f64, f64)> = (0..=100)
+            .filter_map(|k| cfg.wand.at(t_end * k as f64 / 100.0))
+            .collect();
+        c.draw_series(LineSeries::new(w.clone(), GREEN.stroke_width(2)))
+            .map_err(err)?
+            .label("wand (goal)")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], GREEN));
+        if let Some(&end) = w.last() {
+            c.draw_series(std::iter::once(Cross::new(end, 8, GREEN.stroke_width(3))))
+                .map_err(err)?;
+        }
+    }
+    // The arm at the start (light) and at the end (solid), and the tip's path.
+    let tips: Vec<(f64, f64)> = s
+        .iter()
+        .map(|x| arm::geometry::tip(x.theta_rad[0], x.theta_rad[1]))
+        .collect();
+    c.draw_series(LineSeries::new(tips, RED))
+        .map_err(err)?
+        .label("tip path")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+    for (sample, style) in [(s.first(), BLUE.mix(0.3)), (s.last(), BLUE.mix(0.9))] {
+        if let Some(x) = sample {
+            for poly in outline(x.theta_rad) {
+                c.draw_series(std::iter::once(PathElement::new(
+                    poly,
+                    style.stroke_width(2),
+                )))
+                .map_err(err)?;
+            }
+        }
+    }
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
+}
