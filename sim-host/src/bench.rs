@@ -63,12 +63,12 @@ pub fn standard_world(seconds: f64, seed: u64) -> Config {
 }
 
 /// The result of `bench sim`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct SimBench {
-    /// Simulated seconds.
+    /// Simulated seconds per repetition.
     pub simulated_s: f64,
-    /// Wall-clock seconds.
-    pub wall_s: f64,
+    /// Wall-clock seconds of each repetition, sorted.
+    pub walls_s: Vec<f64>,
     /// Plant steps.
     pub steps: u64,
     /// Board main-loop passes.
@@ -78,34 +78,55 @@ pub struct SimBench {
 impl fmt::Display for SimBench {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "bench sim: five boards native, 6 moving obstacles, moving wand, plant step 50 us, one thread")?;
-        writeln!(f, "  simulated        {:.1} s", self.simulated_s)?;
-        writeln!(f, "  wall clock       {:.3} s", self.wall_s)?;
+        let w = &self.walls_s;
+        let (best, median, worst) = (w[0], w[w.len() / 2], w[w.len() - 1]);
+        let rtf = |wall: f64| self.simulated_s / wall;
         writeln!(
             f,
-            "  plant steps      {} ({:.2} us each, board passes included)",
+            "  simulated        {:.1} s per repetition, {} repetitions",
+            self.simulated_s,
+            w.len()
+        )?;
+        writeln!(
+            f,
+            "  wall clock       best {best:.3} s, median {median:.3} s, worst {worst:.3} s"
+        )?;
+        writeln!(
+            f,
+            "  plant steps      {} ({:.2} us each at the median, board passes included)",
             self.steps,
-            self.wall_s * 1e6 / self.steps as f64
+            median * 1e6 / self.steps as f64
         )?;
         writeln!(f, "  board passes     {}", self.polls)?;
         write!(
             f,
-            "  real-time factor {:.1}x (target >= 50x)",
-            self.simulated_s / self.wall_s
+            "  real-time factor median {:.1}x (best {:.1}x, worst {:.1}x; target >= 50x)",
+            rtf(median),
+            rtf(best),
+            rtf(worst)
         )
     }
 }
 
-/// Runs the standard load for `seconds` of simulated time.
-pub fn sim(seconds: f64) -> SimBench {
-    let mut s = Sim::new(standard_world(seconds, 1));
-    let start = Instant::now();
-    while !s.done() {
-        s.step();
+/// Runs the standard load for `seconds` of simulated time, `reps` times (host machines are
+/// noisy: the report gives the spread).
+pub fn sim(seconds: f64, reps: usize) -> SimBench {
+    let mut walls_s = Vec::new();
+    let mut last = None;
+    for _ in 0..reps.max(1) {
+        let mut s = Sim::new(standard_world(seconds, 1));
+        let start = Instant::now();
+        while !s.done() {
+            s.step();
+        }
+        walls_s.push(start.elapsed().as_secs_f64());
+        last = Some(s);
     }
-    let wall_s = start.elapsed().as_secs_f64();
+    walls_s.sort_by(f64::total_cmp);
+    let s = last.expect("at least one repetition");
     SimBench {
         simulated_s: s.t_s(),
-        wall_s,
+        walls_s,
         steps: s.steps,
         polls: s.board_stats().iter().map(|b| b.polls).sum(),
     }

@@ -37,9 +37,12 @@ enum Cmd {
     Bench {
         /// What to measure (sim).
         what: String,
-        /// Simulated seconds.
+        /// Simulated seconds per repetition.
         #[arg(long, default_value_t = 10.0)]
         seconds: f64,
+        /// Repetitions (the report gives best, median and worst).
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
     },
     /// Boot board images on emulated 68020s and print each board's heartbeat and status.
     Boot {
@@ -106,9 +109,13 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Cmd::Bench { what, seconds } => match what.as_str() {
+        Cmd::Bench {
+            what,
+            seconds,
+            reps,
+        } => match what.as_str() {
             "sim" => {
-                let r = sim_host::bench::sim(seconds);
+                let r = sim_host::bench::sim(seconds, reps);
                 println!("{r}");
                 ExitCode::SUCCESS
             }

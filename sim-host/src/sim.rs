@@ -342,6 +342,9 @@ pub struct Sim {
     /// Collision figures so far.
     pub collisions: Collisions,
     in_contact: bool,
+    /// Obstacle disks at the current time (computed once per step, used by the oracle at
+    /// the end of a step and by the beacons at the start of the next).
+    disks: Vec<Disk>,
 }
 
 impl Sim {
@@ -384,7 +387,9 @@ impl Sim {
                 min_clearance_m: f64::INFINITY,
             },
             in_contact: false,
+            disks: Vec::new(),
         };
+        sim.disks = sim.cfg.obstacles.iter().map(|o| o.at(0.0)).collect();
         sim.sync_devices();
         for i in 0..sim.slots.len() {
             sim.with_board(i, 0, |code, g, io| code.boot(g, io));
@@ -472,8 +477,7 @@ impl Sim {
         }
         let b = &mut self.sensing_io.optics.beacons;
         *b = [None; 8];
-        for (k, o) in self.cfg.obstacles.iter().enumerate() {
-            let d = o.at(t);
+        for (k, d) in self.disks.iter().enumerate() {
             let slot = if k < 5 { k } else { 7 };
             b[slot] = Some((d.x_m, d.y_m));
         }
@@ -542,8 +546,9 @@ impl Sim {
         let [a1, a2] = self.plant.angles_rad();
         let pose = Pose::new(a1, a2);
         let mut contact = false;
-        for o in &self.cfg.obstacles {
-            let c = pose.clearance_m(&o.at(t));
+        for (d, o) in self.disks.iter_mut().zip(&self.cfg.obstacles) {
+            *d = o.at(t);
+            let c = pose.clearance_m(d);
             self.collisions.min_clearance_m = self.collisions.min_clearance_m.min(c);
             contact |= c <= 0.0;
         }
