@@ -7,7 +7,6 @@ use crate::emu::{EmuBoard, RunState, CPU_HZ};
 use crate::image::{Image, ImageError};
 use std::path::{Path, PathBuf};
 use vme_map::log::{read_entries, Kind};
-use vme_map::records::HostCommand;
 use vme_map::{ArrayBus, BoardId, BoardSlot, FaultRecord, GlobalBus, StatusWord, GLOBAL_RAM_SIZE};
 
 /// Where `cargo xtask images` writes the images.
@@ -141,19 +140,7 @@ impl System {
 
     /// Publishes a host command (the host is the command record's only writer).
     pub fn host_command(&mut self, command: u32, board: BoardId) {
-        let mut bus = self.bus();
-        let serial = vme_map::HOST_COMMAND
-            .read(&mut bus)
-            .map(|(c, _)| c.serial)
-            .unwrap_or(0)
-            + 1;
-        let cmd = HostCommand {
-            command,
-            arg0: board.index(),
-            arg1: 0,
-            serial,
-        };
-        vme_map::HOST_COMMAND.publish(&mut bus, &cmd);
+        vme_map::post_host_command(&mut self.bus(), command, board);
     }
 
     /// The board with identity `id`.

@@ -524,19 +524,11 @@ impl Sim {
         match f.kind {
             FaultKind::Halt => self.slots[i].halted = true,
             FaultKind::BusError => {
-                let mut g = self.bus();
-                let serial = vme_map::HOST_COMMAND
-                    .read(&mut g)
-                    .map(|(c, _)| c.serial)
-                    .unwrap_or(0)
-                    + 1;
-                let cmd = vme_map::records::HostCommand {
-                    command: vme_map::records::host_cmd::INJECT_BUS_ERROR,
-                    arg0: f.board.index(),
-                    arg1: 0,
-                    serial,
-                };
-                vme_map::HOST_COMMAND.publish(&mut g, &cmd);
+                vme_map::post_host_command(
+                    &mut self.bus(),
+                    vme_map::records::host_cmd::INJECT_BUS_ERROR,
+                    f.board,
+                );
             }
         }
     }

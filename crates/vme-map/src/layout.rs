@@ -101,6 +101,24 @@ pub fn init_header(bus: &mut dyn GlobalBus) {
     bus.write_u32(HEADER_MAGIC, MAGIC);
 }
 
+/// Posts a host command for `board` (the host is the command record's only writer): the
+/// next serial number, so the board acts on it once. Returns that serial.
+pub fn post_host_command(bus: &mut dyn GlobalBus, command: u32, board: BoardId) -> u32 {
+    let serial = HOST_COMMAND
+        .read(bus)
+        .map(|(c, _)| c.serial)
+        .unwrap_or(0)
+        .wrapping_add(1);
+    let cmd = HostCommand {
+        command,
+        arg0: board.index(),
+        arg1: 0,
+        serial,
+    };
+    HOST_COMMAND.publish(bus, &cmd);
+    serial
+}
+
 /// Whether global RAM carries this layout's header: boards refuse to run on any other.
 pub fn header_ok(bus: &mut dyn GlobalBus) -> bool {
     bus.read_u32(HEADER_MAGIC) == MAGIC && bus.read_u32(HEADER_VERSION) == LAYOUT_VERSION

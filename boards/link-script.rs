@@ -1,4 +1,5 @@
-//! Links the board binary with the board memory map in `linker/board.ld`.
+//! Links a board binary with the board memory map in `linker/board.ld` (shared by every
+//! board package as its build script).
 fn main() {
     let dir = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
     let script = std::path::Path::new(&dir).join("../../linker/board.ld");
