@@ -1,0 +1,272 @@
+//! Unit tests of the servo logic, stepping it alone.
+
+use super::*;
+use params::{LINK1_LAW, LINK2_LAW, TIMER_TICK_Q40};
+use proptest::prelude::*;
+
+const K1: &LinkConst = &LINKS[0];
+const K2: &LinkConst = &LINKS[1];
+
+fn q16(x: f64) -> i64 {
+    (x * 65536.0).round() as i64
+}
+
+#[test]
+fn link_2_is_derived_like_link_1() {
+    let near = |p: &params::LawParams, i: f64| {
+        let k = p.uhat_nm * p.eps / p.s_sat_rad;
+        let b = p.uhat_nm / p.omega_sat_rad_s;
+        (
+            (k / i).sqrt() / std::f64::consts::TAU,
+            b / (2.0 * (k * i).sqrt()),
+        )
+    };
+    let (f1, z1) = near(&LINK1_LAW, arm::LINK1.inertia_kgm2);
+    let (f2, z2) = near(&LINK2_LAW, arm::LINK2.inertia_kgm2);
+    assert!(
+        (f1 - 9.9).abs() < 0.1 && (z1 - 0.995).abs() < 0.01,
+        "{f1} Hz zeta {z1}"
+    );
+    assert!(
+        (f2 - f1).abs() < 1e-9 && (z2 - 1.0).abs() < 1e-9,
+        "{f2} Hz zeta {z2}"
+    );
+    assert!((LINK2_LAW.omega_sat_rad_s - 6.02).abs() < 0.01);
+    assert!((LINK2_LAW.s_sat_rad - 0.772).abs() < 0.001);
+}
+
+#[test]
+fn observer_gains_map_the_continuous_poles() {
+    let (k1, k2) = params::observer_gains(params::T_NOMINAL_S);
+    assert!((k1 - 892.6).abs() < 1.0, "{k1}");
+    assert!((k2 - 344_400.0).abs() < 1000.0, "{k2}");
+    // At a vanishing period the discrete gains tend to the continuous ones.
+    let (a, b) = params::observer_gains(1e-7);
+    assert!(
+        (a - 900.0).abs() < 0.1 && (b - 400_000.0).abs() < 100.0,
+        "{a} {b}"
+    );
+}
+
+#[test]
+fn each_regime_of_the_law() {
+    // Far from the goal at rest: full torque toward it.
+    let (u, r) = law(K1, q16(-3.0), 0);
+    assert_eq!(r, Regime::Saturated);
+    assert_eq!(u, K1.umax_q16);
+    // On the switching curve while braking: err = -w^2 I/(2u^) makes s~ = 0; the velocity
+    // term alone (saturated at 1) gives u^ of braking torque: sliding, not saturated.
+    let w = 20.0;
+    let err = -w * w * arm::LINK1.inertia_kgm2 / (2.0 * LINK1_LAW.uhat_nm);
+    let (u, r) = law(K1, q16(err), q16(w));
+    assert_eq!(r, Regime::Sliding);
+    let u_nm = u as f64 / 65536.0;
+    assert!((u_nm + LINK1_LAW.uhat_nm).abs() < 0.01, "{u_nm}");
+    // Near the goal: PD with K = 182.6 N m/rad, b = 5.83 N m s.
+    let (u, r) = law(K1, q16(0.001), q16(0.0));
+    assert_eq!(r, Regime::Linear);
+    let k = LINK1_LAW.uhat_nm * LINK1_LAW.eps / LINK1_LAW.s_sat_rad;
+    assert!(
+        ((u as f64 / 65536.0) + k * 0.001).abs() < 0.002,
+        "{}",
+        u as f64 / 65536.0
+    );
+    let (u, _) = law(K1, 0, q16(0.1));
+    let b = LINK1_LAW.uhat_nm / LINK1_LAW.omega_sat_rad_s;
+    assert!(
+        ((u as f64 / 65536.0) + b * 0.1 + k * 0.1 * 0.1 * arm::LINK1.inertia_kgm2 / 21.0).abs()
+            < 0.01
+    );
+}
+
+#[test]
+fn the_arrest_point_is_where_full_braking_stops() {
+    let w = 10.0;
+    let a = arrest_point(K1, q16(1.0), q16(w)) as f64 / 65536.0;
+    let want = 1.0 + w * w / (2.0 * 13.0 / arm::LINK1.inertia_kgm2);
+    assert!((a - want).abs() < 1e-4, "{a} vs {want}");
+    let a = arrest_point(K2, q16(0.0), q16(-w)) as f64 / 65536.0;
+    assert!(
+        (a + w * w / (2.0 * arm::LINK2.torque_limit_nm / arm::LINK2.inertia_kgm2)).abs() < 1e-4
+    );
+}
+
+#[test]
+fn torque_maps_to_dac_codes_within_range() {
+    assert_eq!(dac_code(K1, 0), 0);
+    assert_eq!(
+        dac_code(K1, K1.umax_q16),
+        params::DAC_MAX,
+        "umax is full scale: clamps to 2047"
+    );
+    assert_eq!(dac_code(K1, -K1.umax_q16), params::DAC_MIN);
+    // 6.5 N m on link 1 = 5 A = 5 V = code 1024.
+    assert_eq!(dac_code(K1, q16(6.5)), 1024);
+    // 1.625 N m on link 2 = 5 A: code 1024.
+    assert_eq!(dac_code(K2, q16(1.625)), 1024);
+}
+
+fn input(enc: [i32; 2], timer: u16, goal: [f64; 2], cycle: u32) -> Input {
+    Input {
+        enc: [enc[0] as u16, enc[1] as u16],
+        timer,
+        subgoal: Some(Subgoal {
+            goal_urad: [(goal[0] * 1e6) as i32, (goal[1] * 1e6) as i32],
+            cycle,
+        }),
+    }
+}
+
+#[test]
+fn the_timer_and_counters_unwrap() {
+    let mut s = Servo::new();
+    s.step(&input([-5, 100], 65000, [0.0; 2], 1));
+    let o = s.step(&input([-5 + 100, 100], 200, [0.0; 2], 2));
+    assert_eq!(o.period_ticks, 736, "65000 -> 200 across the wrap");
+    // +40000 counts on link 1, 100 per latch, wrap the 16-bit counter past +32767: the
+    // extension must still count them all.
+    let mut o = o;
+    for n in 2..=400 {
+        o = s.step(&input(
+            [-5 + 100 * n, 100],
+            200u16.wrapping_add(667u16.wrapping_mul(n as u16)),
+            [0.0; 2],
+            2 + n as u32,
+        ));
+    }
+    let want = (40000 - 5) as f64 * std::f64::consts::TAU / 32768.0;
+    assert!(
+        (o.theta_q16[0] as f64 / 65536.0 - want).abs() < 1e-4,
+        "{}",
+        o.theta_q16[0]
+    );
+    assert_eq!(TIMER_TICK_Q40, 549_756);
+}
+
+#[test]
+fn the_first_pass_only_initialises() {
+    let mut s = Servo::new();
+    let o = s.step(&input([1000, -300], 10, [1.0, 1.0], 1));
+    assert!(!o.enable);
+    assert_eq!(o.dac, [0, 0]);
+    assert_eq!(
+        s.observers()[0].theta_q16,
+        (1000i64 * K1.rad_per_count_q32) >> 16
+    );
+}
+
+#[test]
+fn the_observer_converges_to_a_ramp() {
+    // Link 2 turning at 5 rad/s, sampled at 3 kHz with the encoder's quantisation.
+    let mut obs = Observer::default();
+    let dt_ticks = 667u16;
+    let dt_q32 = (dt_ticks as i64 * TIMER_TICK_Q40) >> 8;
+    let dt = dt_ticks as f64 / 2e6;
+    let counts_per_rad = 8192.0 / std::f64::consts::TAU;
+    for n in 1..=300 {
+        let theta = 5.0 * dt * n as f64;
+        let y = ((theta * counts_per_rad).floor() as i64 * K2.rad_per_count_q32) >> 16;
+        obs.update(K2, y, 0, dt_q32);
+    }
+    let w = obs.omega_q16 as f64 / 65536.0;
+    assert!((w - 5.0).abs() < 0.05, "observed {w} rad/s");
+}
+
+#[test]
+fn a_stale_subgoal_makes_the_servo_hold_at_its_arrest_point_once() {
+    let mut s = Servo::new();
+    let mut timer = 0u16;
+    let mut step = |s: &mut Servo, cycle| {
+        timer = timer.wrapping_add(667);
+        s.step(&input([0, 0], timer, [0.5, 0.0], cycle))
+    };
+    for c in 0..10 {
+        let o = step(&mut s, c);
+        assert_eq!(o.hold, None);
+    }
+    // The reflex stops: the cycle counter freezes. 20 ms later the servo holds.
+    let mut faults = 0;
+    let mut held = None;
+    for _ in 0..100 {
+        let o = step(&mut s, 9);
+        if o.new_fault.is_some() {
+            faults += 1;
+            assert_eq!(o.new_fault, Some(Hold::Stale));
+        }
+        if o.hold == Some(Hold::Stale) {
+            held.get_or_insert(o.goal_q16);
+            assert_eq!(Some(o.goal_q16), held, "the hold goal stays put");
+            assert_ne!(o.goal_q16[0], urad_to_q16(500_000), "not the stale subgoal");
+        }
+    }
+    assert_eq!(faults, 1, "the fault is recorded once");
+    // Fresh again: it follows the subgoal.
+    let o = step(&mut s, 10);
+    assert_eq!(o.hold, None);
+    assert_eq!(o.goal_q16[0], urad_to_q16(500_000));
+}
+
+#[test]
+fn torn_missing_and_out_of_range_subgoals_hold() {
+    let mut s = Servo::new();
+    let o = s.step(&Input {
+        enc: [0, 0],
+        timer: 0,
+        subgoal: None,
+    });
+    assert_eq!(
+        (o.hold, o.new_fault),
+        (Some(Hold::NoSubgoal), None),
+        "start-up: hold quietly"
+    );
+    s.step(&input([0, 0], 667, [0.1, 0.0], 1));
+    let o = s.step(&Input {
+        enc: [0, 0],
+        timer: 1334,
+        subgoal: None,
+    });
+    assert_eq!((o.hold, o.new_fault), (Some(Hold::Torn), Some(Hold::Torn)));
+    let o = s.step(&input([0, 0], 2001, [30.0, 0.0], 2));
+    assert_eq!(
+        (o.hold, o.new_fault),
+        (Some(Hold::OutOfRange), Some(Hold::OutOfRange))
+    );
+}
+
+#[test]
+fn unit_conversions() {
+    assert_eq!(urad_to_q16(1_000_000), 65536);
+    assert_eq!(urad_to_q16(-3_000_000), -196_608);
+    assert_eq!(q16_to_urad(65536), 1_000_000);
+    // Q16's LSB is 15.26 urad: a round trip is exact to half of it.
+    for u in [1_234_567, -7, 25_000_000, -25_000_000] {
+        assert!((q16_to_urad(urad_to_q16(u)) - u).abs() <= 8, "{u}");
+    }
+}
+
+proptest! {
+    #[test]
+    fn the_command_never_exceeds_umax(err in -100.0f64..100.0, w in -700.0f64..700.0, link in 0usize..2) {
+        let k = &LINKS[link];
+        let (u, _) = law(k, q16(err), q16(w));
+        prop_assert!(u.abs() <= k.umax_q16);
+        let code = dac_code(k, u);
+        let nm = code as i64 * k.nm_per_dac_q16;
+        prop_assert!(nm.abs() <= k.umax_q16);
+    }
+
+    #[test]
+    fn any_encoder_and_timer_sequence_stays_within_umax(
+        seq in proptest::collection::vec((any::<u16>(), any::<u16>(), any::<u16>(), -30_000_000i32..30_000_000, any::<bool>()), 1..60)
+    ) {
+        let mut s = Servo::new();
+        for (i, (e0, e1, t, g, fresh)) in seq.into_iter().enumerate() {
+            let sub = fresh.then_some(Subgoal { goal_urad: [g, -g], cycle: i as u32 });
+            let o = s.step(&Input { enc: [e0, e1], timer: t, subgoal: sub });
+            for (l, k) in LINKS.iter().enumerate() {
+                prop_assert!((o.torque_q16[l] as i64).abs() <= k.umax_q16);
+                prop_assert!((params::DAC_MIN..=params::DAC_MAX).contains(&o.dac[l]));
+            }
+        }
+    }
+}
