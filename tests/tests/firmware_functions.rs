@@ -111,3 +111,55 @@ fn cas_swaps_only_when_the_word_matches() {
     assert_eq!(found, 9, "no swap: the word was 9");
     assert_eq!(u32::from_be_bytes(g[0x800..0x804].try_into().unwrap()), 9);
 }
+
+#[test]
+fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
+    let img = Image::load(&images_dir().join("servo.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut b = EmuBoard::new(
+        BoardId::Servo,
+        &img,
+        sim_host::devices::standalone(BoardId::Servo),
+        &mut global,
+    );
+    let f = img
+        .symbol("__fx_mul_shr")
+        .expect("__fx_mul_shr in the servo image");
+    let mut rng = sim_host::sim::Rng::new(42);
+    let edge = [
+        0,
+        1,
+        -1,
+        2,
+        -2,
+        65536,
+        -65536,
+        i32::MAX,
+        i32::MIN,
+        i32::MAX - 1,
+        i32::MIN + 1,
+        1 << 30,
+        -(1 << 30),
+    ];
+    let mut cases = Vec::new();
+    for &a in &edge {
+        for &bb in &edge {
+            for sh in [1, 8, 16, 24, 31, 32] {
+                cases.push((a, bb, sh));
+            }
+        }
+    }
+    for _ in 0..3000 {
+        let a = rng.next_u64() as i32 >> (rng.next_u64() % 31);
+        let bb = rng.next_u64() as i32 >> (rng.next_u64() % 31);
+        let sh = 1 + (rng.next_u64() % 32) as u32;
+        cases.push((a, bb, sh));
+    }
+    for (a, bb, sh) in cases {
+        let (got, _) = b
+            .call(&mut global, f, &[a as u32, bb as u32, sh], 10_000)
+            .unwrap();
+        let want = servo::fx::host_mul_shr(a, bb, sh);
+        assert_eq!(got as i32, want, "mul_shr({a}, {bb}, {sh})");
+    }
+}

@@ -1,6 +1,12 @@
-//! The CCR-clobber check: refuses images in which LLVM's M68k backend placed a register
-//! move between an instruction that sets the condition codes and the branch that reads them
-//! (llvm/llvm-project#152816, #213564; docs/toolchain.md).
+//! The condition-code checks: refuse images in which LLVM's M68k backend
+//!
+//! 1. placed a register move between an instruction that sets the condition codes and the
+//!    branch that reads them (llvm/llvm-project#152816, #213564), or
+//! 2. made an extend-flag reader (`ADDX`, `SUBX`, `NEGX`, `ROXL`, `ROXR`) consume the borrow
+//!    of a `CMP` or `TST`, which set C but leave X untouched on the 68k: the reader gets a
+//!    stale X from older code.
+//!
+//! See docs/toolchain.md.
 //!
 //! On the 68k, `MOVE`, `MOVEQ` and `CLR` set N and Z and clear V and C, but LLVM models its
 //! register copies as leaving the flags alone. The backend never means to branch on a move's
@@ -121,6 +127,61 @@ fn classify(mn: &str, ops: &str) -> Ccr {
     Ccr::Keeps
 }
 
+/// Whether a mnemonic reads the X (extend) flag.
+fn reads_x(mn: &str) -> bool {
+    let m = stem(mn);
+    ["addx", "subx", "negx", "roxl", "roxr"]
+        .iter()
+        .any(|p| m.starts_with(p))
+}
+
+/// How an instruction affects the X flag, seen from an X reader looking back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum XEffect {
+    /// Sets X (and C): a proper carry source.
+    Sets,
+    /// Sets C but not X: a compare or test whose borrow an X reader cannot see.
+    CarryOnly,
+    /// Leaves X alone.
+    Keeps,
+    /// Ends straight-line code.
+    Flow,
+}
+
+fn x_effect(mn: &str, ops: &str) -> XEffect {
+    let m = stem(mn);
+    let to_areg = ops
+        .trim_end()
+        .rsplit(',')
+        .next()
+        .is_some_and(|d| d.trim().starts_with("%a") || d.trim() == "%sp" || d.trim() == "%fp");
+    if m.starts_with("bra")
+        || m.starts_with("bsr")
+        || m.starts_with("jmp")
+        || m.starts_with("jsr")
+        || m.starts_with("rt")
+        || m.starts_with("db")
+    {
+        return XEffect::Flow;
+    }
+    if m.starts_with("adda")
+        || m.starts_with("suba")
+        || ((m.starts_with("addq") || m.starts_with("subq")) && to_areg)
+    {
+        return XEffect::Keeps;
+    }
+    const SETS: [&str; 11] = [
+        "add", "sub", "neg", "asl", "asr", "lsl", "lsr", "roxl", "roxr", "abcd", "sbcd",
+    ];
+    if SETS.iter().any(|p| m.starts_with(p)) {
+        return XEffect::Sets;
+    }
+    if m.starts_with("cmp") || m.starts_with("tst") {
+        return XEffect::CarryOnly;
+    }
+    XEffect::Keeps
+}
+
 /// Scans `objdump -d --no-show-raw-insn` output.
 pub fn scan(disassembly: &str) -> Vec<Hit> {
     let mut hits = Vec::new();
@@ -147,6 +208,23 @@ pub fn scan(disassembly: &str) -> Vec<Hit> {
         };
         let rest = rest.trim();
         let (mn, ops) = rest.split_once(char::is_whitespace).unwrap_or((rest, ""));
+        if reads_x(mn) {
+            for (pm, po) in run.iter().rev() {
+                match x_effect(pm, po) {
+                    XEffect::CarryOnly => {
+                        hits.push(Hit {
+                            function: function.clone(),
+                            branch_addr: addr,
+                            branch: rest.to_string(),
+                            clobber: format!("{pm} {po} (sets C, not X)"),
+                        });
+                        break;
+                    }
+                    XEffect::Sets | XEffect::Flow => break,
+                    XEffect::Keeps => {}
+                }
+            }
+        }
         if reads_ccr(mn) {
             for (pm, po) in run.iter().rev() {
                 match classify(pm, po) {
@@ -210,6 +288,21 @@ mod tests {
         assert!(scan(call).is_empty());
         let scc = "00000100 <f>:\n 100:\tcmpl %d1,%d0\n 102:\tmoveq #0,%d2\n 104:\tseq %d3\n";
         assert_eq!(scan(scc).len(), 1, "Scc reads the flags too");
+    }
+
+    #[test]
+    fn an_extend_reader_after_a_compare_is_found() {
+        // From the servo image: cmpi sets C (not X), subx reads a stale X.
+        let bad = "000016f0 <g>:\n 1708:\tcmpib #1,%d1\n 170c:\tsubxb %d1,%d1\n";
+        let h = scan(bad);
+        assert_eq!(h.len(), 1);
+        assert!(h[0].clobber.contains("sets C, not X"));
+        // 64-bit add: add then addx, with moves between: fine.
+        let ok = "00000100 <f>:\n 100:\taddl %d3,%d0\n 102:\tmoveq #0,%d3\n 104:\taddxl %d3,%d1\n";
+        assert!(scan(ok).is_empty());
+        // A 64-bit subtract-compare (sub then subx) is fine too.
+        let ok2 = "00000100 <f>:\n 100:\tsubl %d2,%d0\n 102:\tsubxl %d3,%d1\n";
+        assert!(scan(ok2).is_empty());
     }
 
     #[test]

@@ -136,7 +136,7 @@ fn check_ccr(elf: &Path) -> Result<(), String> {
         return Ok(());
     }
     let mut msg = format!(
-        "{}: LLVM placed a flag-clobbering move between a compare and its branch ({} sites; docs/toolchain.md):",
+        "{}: LLVM M68k condition-code miscompile ({} sites; docs/toolchain.md):",
         elf.display(),
         fatal.len()
     );

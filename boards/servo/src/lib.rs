@@ -1,18 +1,28 @@
-//! The servo board: the I/O shell that wires its private registers and global RAM to its
-//! logic (thesis ch. III (near time-optimal servo); design.md section 3). The logic's `step` arrives with issue 5;
-//! until then the board boots, checks the global RAM header and publishes its heartbeat and
-//! status. The same code runs in the image (`src/main.rs`, volatile MMIO) and in the
-//! simulator's native mode (device models behind [`IoBus`]).
+//! The servo board: wires the encoders, the 2 MHz timer, the DACs and the amplifier enables
+//! to the observers and law III.36 of `crates/servo` (thesis ch. III), and publishes the
+//! servo state (angles, velocities, arrest points, torques) for the reflex and planner. The
+//! same code runs in the image (`src/main.rs`, volatile MMIO) and in the simulator's native
+//! mode (device models behind [`IoBus`]).
+//!
+//! Fail-safe: the goal is the reflex subgoal only while that record is whole, fresh and
+//! plausible; otherwise the servo holds at its arrest point, records the fault in its status
+//! slot (state `Degraded`) and never commands beyond umax (`crates/servo`).
 #![no_std]
 #![deny(missing_docs)]
 
 use board_shell::Shell;
+use regs::servo::{AmpCtrl, ServoIo};
 use regs::IoBus;
-use vme_map::{BoardId, BoardState, GlobalBus};
+use servo::{q16_to_urad, Hold, Input, Servo, Subgoal};
+use vme_map::records::ServoState;
+use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
 /// The servo board's state between main-loop passes.
 pub struct Board {
     shell: Shell,
+    servo: Servo,
+    ticks: u64,
+    loops: u32,
 }
 
 impl Default for Board {
@@ -26,6 +36,9 @@ impl Board {
     pub const fn new() -> Self {
         Self {
             shell: Shell::new(BoardId::Servo),
+            servo: Servo::new(),
+            ticks: 0,
+            loops: 0,
         }
     }
 
@@ -40,14 +53,66 @@ impl Board {
         self.shell.boot(g, || {});
     }
 
-    /// One pass of the main loop. Returns the new heartbeat.
+    /// One pass of the main loop: sample, control, drive, publish. Returns the heartbeat.
     pub fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
-        self.shell.end(g, BoardState::Running)
+        let mut hw = ServoIo::new(&mut *io);
+        let enc = hw.latch_encoders();
+        let timer = hw.timer();
+        let subgoal = match vme_map::REFLEX_SUBGOAL.read(g) {
+            // Sequence 0: the reflex has never published.
+            Ok((_, 0)) | Err(_) => None,
+            Ok((r, _)) => Some(Subgoal {
+                goal_urad: [r.goal1_urad, r.goal2_urad],
+                cycle: r.cycle,
+            }),
+        };
+        let out = self.servo.step(&Input {
+            enc,
+            timer,
+            subgoal,
+        });
+        hw.set_dac(0, out.dac[0]);
+        hw.set_dac(1, out.dac[1]);
+        if out.enable {
+            hw.set_amps(AmpCtrl::ENABLE0 | AmpCtrl::ENABLE1);
+        }
+        self.ticks += out.period_ticks as u64;
+        self.loops = self.loops.wrapping_add(1);
+        let mnm = |q: i32| ((q as i64 * 1000) >> 16) as i32;
+        let state = ServoState {
+            theta1_urad: q16_to_urad(out.theta_q16[0]),
+            theta2_urad: q16_to_urad(out.theta_q16[1]),
+            omega1_urad_s: q16_to_urad(out.omega_q16[0]),
+            omega2_urad_s: q16_to_urad(out.omega_q16[1]),
+            arrest1_urad: q16_to_urad(out.arrest_q16[0]),
+            arrest2_urad: q16_to_urad(out.arrest_q16[1]),
+            torque1_mnm: mnm(out.torque_q16[0]),
+            torque2_mnm: mnm(out.torque_q16[1]),
+            t_us: (self.ticks >> 1) as u32,
+            loops: self.loops,
+        };
+        vme_map::SERVO_STATE.publish(g, &state);
+        if let Some(why) = out.new_fault {
+            let code = match why {
+                Hold::Stale | Hold::NoSubgoal => FaultCode::StaleHeartbeat,
+                Hold::Torn => FaultCode::TornRecord,
+                Hold::OutOfRange => FaultCode::OutOfRange,
+            };
+            self.shell
+                .life()
+                .degraded(g, code, vme_map::REFLEX_SUBGOAL.offset());
+        }
+        let st = match out.hold {
+            Some(Hold::NoSubgoal) | None => BoardState::Running,
+            Some(_) => BoardState::Degraded,
+        };
+        self.shell.end(g, st)
     }
 }
 
-/// The board's safe state: both DACs at zero, both amplifiers disabled. Also the image's safe-stop hook after a fault.
+/// The board's safe state: both DACs at zero, both amplifiers disabled. Also the image's
+/// safe-stop hook after a fault.
 pub fn safe(io: &mut impl IoBus) {
     regs::servo::ServoIo::new(io).safe();
 }

@@ -160,3 +160,43 @@ __vme_cas32:                    /* u32 __vme_cas32(u32 *addr, u32 current, u32 n
     move.l  12(%sp), %d1
     cas.l   %d0, %d1, (%a0)     /* equal: store new; else d0 = value found */
     rts
+
+/* ---- fixed-point multiply: the servo's only wide arithmetic (crates/servo::fx) ----
+ * i32 __fx_mul_shr(i32 a, i32 b, u32 sh), 1 <= sh <= 32:
+ *   round((a * b) >> sh), saturated to i32: the 64-bit product of MULS.L, plus 1 << (sh-1),
+ *   arithmetic shift right. Bit-identical to the host version in crates/servo/src/fx.rs. */
+    .section .text.__fx_mul_shr, "ax"
+    .globl __fx_mul_shr
+__fx_mul_shr:
+    movem.l %d2-%d3, -(%sp)     /* arguments now at 12, 16, 20 */
+    move.l  12(%sp), %d0
+    move.l  16(%sp), %d1
+    muls.l  %d1, %d1:%d0        /* d1:d0 = a * b */
+    move.l  20(%sp), %d2        /* sh */
+    moveq   #1, %d3
+    subq.l  #1, %d2
+    lsl.l   %d2, %d3            /* 1 << (sh - 1) */
+    addq.l  #1, %d2
+    add.l   %d3, %d0
+    moveq   #0, %d3
+    addx.l  %d3, %d1            /* d1:d0 += rounding */
+    movea.l %d2, %a0            /* keep sh */
+    lsr.l   %d2, %d0            /* low >>= sh (sh = 32 gives 0) */
+    move.l  %d1, %d3
+    neg.l   %d2
+    add.l   #32, %d2            /* 32 - sh */
+    lsl.l   %d2, %d3            /* high << (32 - sh) */
+    or.l    %d3, %d0            /* low word of the result */
+    move.l  %a0, %d2
+    asr.l   %d2, %d1            /* high word of the result */
+    move.l  %d0, %d3
+    moveq   #31, %d2
+    asr.l   %d2, %d3            /* sign extension of the low word */
+    cmp.l   %d3, %d1
+    beq.s   1f                  /* fits in 32 bits */
+    move.l  #0x7fffffff, %d0
+    tst.l   %d1
+    bpl.s   1f
+    move.l  #0x80000000, %d0
+1:  movem.l (%sp)+, %d2-%d3
+    rts

@@ -3,7 +3,8 @@
 //! `step`; the arrest point the reflexes need (ch. V); torque-to-DAC scaling.
 //!
 //! Everything runs in fixed point: angles and velocities in Q16 (`_q16`: units of 2^-16 rad,
-//! rad/s, N m), products in 64 bits, no 64-bit division. The constants are derived at compile
+//! rad/s, N m) in `i32`, every wide product through [`fx::mul_shr`] (MULS.L in assembly on the
+//! 68020). The constants are derived at compile
 //! time from `crates/arm` (module [`params`]). Integer arithmetic gives the same bits on the
 //! host and the 68020, so native and image runs agree exactly, and it avoids the toolchain's
 //! miscompiled soft float (docs/toolchain.md).
@@ -21,39 +22,23 @@
 #![deny(missing_docs)]
 
 pub mod consts;
+pub mod fx;
 pub mod params;
 
+use fx::mul_shr;
 use params::{LinkConst, LINKS, TIMER_TICK_Q40};
 
 /// One fixed-point unit (1.0 in Q16).
-pub const ONE_Q16: i64 = 1 << 16;
+pub const ONE_Q16: i32 = 1 << 16;
 
-/// Multiplies two Q16 values (64-bit product, rounded shift back to Q16).
-#[inline]
-pub const fn mul_q16(a: i64, b: i64) -> i64 {
-    (a * b + (1 << 15)) >> 16
-}
-
-/// Saturating conversion to `i32`.
-#[inline]
-pub const fn sat_i32(x: i64) -> i32 {
-    if x > i32::MAX as i64 {
-        i32::MAX
-    } else if x < i32::MIN as i64 {
-        i32::MIN
-    } else {
-        x as i32
-    }
-}
-
-/// Micro-radians to Q16 radians (exactly: x 2^16 / 10^6 as a Q32 multiplier).
-pub const fn urad_to_q16(urad: i32) -> i32 {
-    ((urad as i64 * 281_474_977 + (1 << 31)) >> 32) as i32
+/// Micro-radians to Q16 radians (x 2^16 / 10^6 as a Q32 multiplier, rounded).
+pub fn urad_to_q16(urad: i32) -> i32 {
+    mul_shr(urad, 281_474_977, 32)
 }
 
 /// Q16 radians to micro-radians (x 10^6 / 2^16, rounded).
-pub const fn q16_to_urad(q: i32) -> i32 {
-    sat_i32((q as i64 * 1_000_000 + (1 << 15)) >> 16)
+pub fn q16_to_urad(q: i32) -> i32 {
+    mul_shr(q, 1_000_000, 16)
 }
 
 /// The regime law III.36 is in, for tests and traces.
@@ -67,77 +52,90 @@ pub enum Regime {
     Linear,
 }
 
+/// omega |omega| c for a Q32 constant `c`: through Q24 so small speeds keep precision.
+fn signed_square(omega_q16: i32, c_q32: i32) -> i32 {
+    let wc_q24 = mul_shr(omega_q16, c_q32, 24);
+    mul_shr(wc_q24, omega_q16.saturating_abs(), 24)
+}
+
 /// Law III.36 for one link: the torque (Q16 N m) for a position error and velocity.
-pub fn law(k: &LinkConst, err_q16: i64, omega_q16: i64) -> (i64, Regime) {
-    let w2 = (omega_q16 * omega_q16.abs()) >> 16; // Q16 rad^2/s^2
-    let s = err_q16 + ((w2 * k.brake_q32) >> 32); // Q16 rad
-    let x1 = mul_q16(omega_q16, k.inv_omega_sat_q16).clamp(-ONE_Q16, ONE_Q16);
-    let x2 = mul_q16(s, k.inv_s_sat_q16).clamp(-ONE_Q16, ONE_Q16);
-    let arg = mul_q16(k.uhat_over_umax_q16, x1 + mul_q16(k.eps_q16, x2));
+#[inline(never)]
+pub fn law(k: &LinkConst, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
+    let s = err_q16.saturating_add(signed_square(omega_q16, k.brake_q32)); // Q16 rad
+    let x1 = mul_shr(omega_q16, k.inv_omega_sat_q16, 16).clamp(-ONE_Q16, ONE_Q16);
+    let x2 = mul_shr(s, k.inv_s_sat_q16, 16).clamp(-ONE_Q16, ONE_Q16);
+    let arg = mul_shr(k.uhat_over_umax_q16, x1 + mul_shr(k.eps_q16, x2, 16), 16);
     let sat = arg.clamp(-ONE_Q16, ONE_Q16);
     let regime = if sat != arg {
         Regime::Saturated
-    } else if x1.abs() < ONE_Q16 && x2.abs() < ONE_Q16 && err_q16.abs() < k.linear_band_q16 {
+    } else if x1.abs() < ONE_Q16
+        && x2.abs() < ONE_Q16
+        && err_q16.saturating_abs() < k.linear_band_q16
+    {
         Regime::Linear
     } else {
         Regime::Sliding
     };
-    (-mul_q16(k.umax_q16, sat), regime)
+    (-mul_shr(k.umax_q16, sat, 16), regime)
 }
 
 /// Where a link stops under full braking from (`theta`, `omega`): the arrest point of
 /// thesis ch. V, theta + omega |omega| / (2 umax / I).
-pub fn arrest_point(k: &LinkConst, theta_q16: i64, omega_q16: i64) -> i64 {
-    let w2 = (omega_q16 * omega_q16.abs()) >> 16;
-    theta_q16 + ((w2 * k.arrest_q32) >> 32)
+#[inline(never)]
+pub fn arrest_point(k: &LinkConst, theta_q16: i32, omega_q16: i32) -> i32 {
+    theta_q16.saturating_add(signed_square(omega_q16, k.arrest_q32))
 }
 
 /// The DAC code for a torque (Q16 N m) on a link: never beyond the 12-bit range, and the
 /// range itself is umax.
-pub fn dac_code(k: &LinkConst, torque_q16: i64) -> i16 {
-    let c = (torque_q16 * k.dac_per_nm_q16 + (1 << 31)) >> 32;
-    c.clamp(params::DAC_MIN as i64, params::DAC_MAX as i64) as i16
+#[inline(never)]
+pub fn dac_code(k: &LinkConst, torque_q16: i32) -> i16 {
+    mul_shr(torque_q16, k.dac_per_nm_q16, 32).clamp(params::DAC_MIN as i32, params::DAC_MAX as i32)
+        as i16
 }
 
-/// Largest plausible difference between measurement and estimate: 0.5 rad (Q16).
-pub const MAX_INNOVATION_Q16: i64 = ONE_Q16 / 2;
+/// Largest plausible difference between measurement and estimate: 0.01 rad (Q16), some
+/// fifty link-1 counts, far beyond what a link can move unobserved in one loop.
+pub const MAX_INNOVATION_Q16: i32 = 655;
 /// Longest period the observer integrates over in one update: 10 ms (Q32 s).
-pub const MAX_DT_Q32: i64 = 42_949_673;
+pub const MAX_DT_Q32: i32 = 42_949_673;
 
 /// The Luenberger observer of one link (Appendix A): position and velocity estimates driven
 /// by the measured position and the commanded torque.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Observer {
     /// Estimated angle, Q16 rad.
-    pub theta_q16: i64,
+    pub theta_q16: i32,
     /// Estimated velocity, Q16 rad/s.
-    pub omega_q16: i64,
+    pub omega_q16: i32,
 }
 
 impl Observer {
     /// Advances by `dt_q32` seconds (Q32) with measurement `y_q16` and the torque `u_q16` that
     /// was applied over the interval.
     ///
-    /// An innovation beyond [`MAX_INNOVATION_Q16`] is implausible for a link that moves at most
-    /// a few milliradians per loop (an encoder glitch or a restart): the observer re-locks
-    /// onto the measurement at rest instead of integrating it. The period is bounded by
-    /// [`MAX_DT_Q32`] so the 64-bit products cannot overflow.
-    pub fn update(&mut self, k: &LinkConst, y_q16: i64, u_q16: i64, dt_q32: i64) {
-        let e = y_q16 - self.theta_q16;
-        if e.abs() > MAX_INNOVATION_Q16 {
+    /// An innovation beyond [`MAX_INNOVATION_Q16`] is implausible (an encoder glitch or a
+    /// restart): the observer re-locks onto the measurement at rest instead of integrating
+    /// it. The period is bounded by [`MAX_DT_Q32`].
+    #[inline(never)]
+    pub fn update(&mut self, k: &LinkConst, y_q16: i32, u_q16: i32, dt_q32: i32) {
+        let e = y_q16.saturating_sub(self.theta_q16);
+        if e.saturating_abs() > MAX_INNOVATION_Q16 {
             *self = Observer {
                 theta_q16: y_q16,
                 omega_q16: 0,
             };
             return;
         }
-        let dt_q32 = dt_q32.min(MAX_DT_Q32);
-        let dtheta = self.omega_q16 + mul_q16(k.k1_q16, e); // Q16 rad/s
-        let accel = mul_q16(u_q16, k.inv_inertia_q16) + mul_q16(k.k2_q16, e); // Q16 rad/s^2
-        self.theta_q16 += (dtheta * dt_q32) >> 32;
-        self.omega_q16 += (accel * dt_q32) >> 32;
+        let dt = dt_q32.min(MAX_DT_Q32);
+        let dtheta = self.omega_q16 + mul_shr(k.k1_q16, e, 16); // Q16 rad/s
+        let accel = mul_shr(u_q16, k.inv_inertia_q16, 16) + mul_shr(k.k2_q8, e, 8); // Q16 rad/s^2
+        self.theta_q16 = self.theta_q16.saturating_add(mul_shr(dtheta, dt, 32));
         // Physical bound: no link turns faster than its motors' speed limit (x2 margin).
-        self.omega_q16 = self.omega_q16.clamp(-k.omega_limit_q16, k.omega_limit_q16);
+        self.omega_q16 = self
+            .omega_q16
+            .saturating_add(mul_shr(accel, dt, 32))
+            .clamp(-k.omega_limit_q16, k.omega_limit_q16);
     }
 }
 
@@ -214,10 +212,10 @@ pub struct Servo {
     counts: [i32; 2],
     last_timer: u16,
     obs: [Observer; 2],
-    torque_q16: [i64; 2],
+    torque_q16: [i32; 2],
     last_cycle: Option<u32>,
-    since_cycle_q32: i64,
-    hold_goal_q16: Option<[i64; 2]>,
+    since_cycle_q32: i32,
+    hold_goal_q16: Option<[i32; 2]>,
     hold: Option<Hold>,
 }
 
@@ -256,7 +254,7 @@ impl Servo {
     pub fn step(&mut self, input: &Input) -> Output {
         // Extend the 16-bit counters; the first latch is taken as absolute (the counters are
         // zeroed with the arm at angle 0 before power-up).
-        let mut theta = [0i64; 2];
+        let mut theta = [0i32; 2];
         for i in 0..2 {
             if self.started {
                 self.counts[i] = self.counts[i]
@@ -265,11 +263,11 @@ impl Servo {
                 self.counts[i] = input.enc[i] as i16 as i32;
             }
             self.last_enc[i] = input.enc[i];
-            theta[i] = (self.counts[i] as i64 * LINKS[i].rad_per_count_q32) >> 16;
+            theta[i] = mul_shr(self.counts[i], LINKS[i].rad_per_count_q32, 16);
         }
         let ticks = input.timer.wrapping_sub(self.last_timer);
         self.last_timer = input.timer;
-        let dt_q32 = (ticks as i64 * TIMER_TICK_Q40) >> 8;
+        let dt_q32 = mul_shr(ticks as i32, TIMER_TICK_Q40, 8);
         let first = !self.started;
         if first {
             self.started = true;
@@ -296,11 +294,11 @@ impl Servo {
         let mut out = Output {
             dac: [0; 2],
             enable: !first,
-            theta_q16: [sat_i32(theta[0]), sat_i32(theta[1])],
-            omega_q16: [sat_i32(omega[0]), sat_i32(omega[1])],
-            arrest_q16: [sat_i32(arrest[0]), sat_i32(arrest[1])],
+            theta_q16: theta,
+            omega_q16: omega,
+            arrest_q16: arrest,
             torque_q16: [0; 2],
-            goal_q16: [sat_i32(goal[0]), sat_i32(goal[1])],
+            goal_q16: goal,
             period_ticks: ticks,
             hold: self.hold,
             new_fault,
@@ -314,22 +312,23 @@ impl Servo {
             };
             let code = dac_code(&LINKS[i], u);
             // The torque the amplifier will actually produce, for the observer's next update.
-            self.torque_q16[i] = code as i64 * LINKS[i].nm_per_dac_q16;
+            self.torque_q16[i] = code as i32 * LINKS[i].nm_per_dac_q16;
             out.dac[i] = code;
-            out.torque_q16[i] = sat_i32(self.torque_q16[i]);
+            out.torque_q16[i] = self.torque_q16[i];
             out.regime[i] = r;
         }
         out
     }
 
+    #[inline(never)]
     fn choose_goal(
         &mut self,
         sub: Option<Subgoal>,
-        dt_q32: i64,
-        arrest: [i64; 2],
+        dt_q32: i32,
+        arrest: [i32; 2],
         first: bool,
-    ) -> ([i64; 2], Option<Hold>) {
-        let stale_q32 = consts::round(STALE_S * consts::Q32);
+    ) -> ([i32; 2], Option<Hold>) {
+        let stale_q32 = consts::round(STALE_S * consts::Q32) as i32;
         let verdict = match sub {
             None if self.last_cycle.is_none() => Err(Hold::NoSubgoal),
             None => Err(Hold::Torn),
@@ -348,10 +347,7 @@ impl Servo {
                 } else if self.since_cycle_q32 > stale_q32 {
                     Err(Hold::Stale)
                 } else {
-                    Ok([
-                        urad_to_q16(s.goal_urad[0]) as i64,
-                        urad_to_q16(s.goal_urad[1]) as i64,
-                    ])
+                    Ok([urad_to_q16(s.goal_urad[0]), urad_to_q16(s.goal_urad[1])])
                 }
             }
         };
@@ -363,7 +359,14 @@ impl Servo {
             }
             Err(why) => {
                 let goal = *self.hold_goal_q16.get_or_insert(arrest);
-                let new = (self.hold != Some(why) && why != Hold::NoSubgoal).then_some(why);
+                // A fault is new when the reason changes; waiting for a first subgoal is none.
+                // (Written as a match: the boolean form compiled to CMP + SUBX, which reads a
+                // stale X flag on the 68k; docs/toolchain.md.)
+                let new = match why {
+                    Hold::NoSubgoal => None,
+                    w if self.hold == Some(w) => None,
+                    w => Some(w),
+                };
                 self.hold = Some(why);
                 (goal, new)
             }

@@ -95,41 +95,50 @@ pub const DAC_MIN: i16 = regs::servo::DAC_MIN;
 const DAC_FS_V: f64 = regs::servo::DAC_FULL_SCALE_MV as f64 / 1000.0;
 
 /// Seconds per 2 MHz timer tick in Q40 (2^40 / 2e6).
-pub const TIMER_TICK_Q40: i64 = round(Q32 * 256.0 / regs::servo::TIMER_HZ as f64);
+pub const TIMER_TICK_Q40: i32 = fit(round(Q32 * 256.0 / regs::servo::TIMER_HZ as f64));
 
 /// The fixed-point constants of one link.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LinkConst {
     /// Radians per encoder count, Q32.
-    pub rad_per_count_q32: i64,
+    pub rad_per_count_q32: i32,
     /// 1 / inertia, Q16 (1/(kg m^2)).
-    pub inv_inertia_q16: i64,
+    pub inv_inertia_q16: i32,
     /// umax, Q16 N m.
-    pub umax_q16: i64,
+    pub umax_q16: i32,
     /// u^ / umax, Q16.
-    pub uhat_over_umax_q16: i64,
+    pub uhat_over_umax_q16: i32,
     /// 1 / omega_sat, Q16 s/rad.
-    pub inv_omega_sat_q16: i64,
+    pub inv_omega_sat_q16: i32,
     /// eps, Q16.
-    pub eps_q16: i64,
+    pub eps_q16: i32,
     /// 1 / s_sat, Q16 1/rad.
-    pub inv_s_sat_q16: i64,
+    pub inv_s_sat_q16: i32,
     /// I / (2 u^), Q32 s^2/rad: the switching curve.
-    pub brake_q32: i64,
+    pub brake_q32: i32,
     /// I / (2 umax), Q32 s^2/rad: the arrest point.
-    pub arrest_q32: i64,
+    pub arrest_q32: i32,
     /// DAC codes per N m, Q16.
-    pub dac_per_nm_q16: i64,
+    pub dac_per_nm_q16: i32,
     /// N m per DAC code, Q16.
-    pub nm_per_dac_q16: i64,
+    pub nm_per_dac_q16: i32,
     /// Observer gain K1 at the nominal period, Q16 1/s.
-    pub k1_q16: i64,
-    /// Observer gain K2 at the nominal period, Q16 1/s^2.
-    pub k2_q16: i64,
+    pub k1_q16: i32,
+    /// Observer gain K2 at the nominal period, Q8 1/s^2.
+    pub k2_q8: i32,
     /// Velocity bound for the observer: twice the motor speed limit, Q16 rad/s.
-    pub omega_limit_q16: i64,
+    pub omega_limit_q16: i32,
     /// Position errors below which the law counts as near the goal: s_sat, Q16 rad.
-    pub linear_band_q16: i64,
+    pub linear_band_q16: i32,
+}
+
+/// A constant as `i32`; a value that does not fit fails the build.
+const fn fit(x: i64) -> i32 {
+    assert!(
+        x >= i32::MIN as i64 && x <= i32::MAX as i64,
+        "fixed-point constant out of i32 range"
+    );
+    x as i32
 }
 
 /// Converts a link's parameters to fixed point.
@@ -138,21 +147,23 @@ pub const fn link_const(l: &Link, p: &LawParams) -> LinkConst {
     let nm_per_volt = KT_NM_PER_A * l.gear_ratio * arm::AMP.transconductance_a_per_v;
     let nm_per_code = nm_per_volt * DAC_FS_V / 2048.0;
     LinkConst {
-        rad_per_count_q32: round(Q32 * core::f64::consts::TAU / l.counts_per_rev as f64),
-        inv_inertia_q16: round(Q16 / l.inertia_kgm2),
-        umax_q16: round(Q16 * p.umax_nm),
-        uhat_over_umax_q16: round(Q16 * p.uhat_nm / p.umax_nm),
-        inv_omega_sat_q16: round(Q16 / p.omega_sat_rad_s),
-        eps_q16: round(Q16 * p.eps),
-        inv_s_sat_q16: round(Q16 / p.s_sat_rad),
-        brake_q32: round(Q32 * l.inertia_kgm2 / (2.0 * p.uhat_nm)),
-        arrest_q32: round(Q32 * l.inertia_kgm2 / (2.0 * p.umax_nm)),
-        dac_per_nm_q16: round(Q16 / nm_per_code),
-        nm_per_dac_q16: round(Q16 * nm_per_code),
-        k1_q16: round(Q16 * k1),
-        k2_q16: round(Q16 * k2),
-        omega_limit_q16: round(Q16 * 2.0 * l.max_speed_rad_s),
-        linear_band_q16: round(Q16 * p.s_sat_rad),
+        rad_per_count_q32: fit(round(
+            Q32 * core::f64::consts::TAU / l.counts_per_rev as f64,
+        )),
+        inv_inertia_q16: fit(round(Q16 / l.inertia_kgm2)),
+        umax_q16: fit(round(Q16 * p.umax_nm)),
+        uhat_over_umax_q16: fit(round(Q16 * p.uhat_nm / p.umax_nm)),
+        inv_omega_sat_q16: fit(round(Q16 / p.omega_sat_rad_s)),
+        eps_q16: fit(round(Q16 * p.eps)),
+        inv_s_sat_q16: fit(round(Q16 / p.s_sat_rad)),
+        brake_q32: fit(round(Q32 * l.inertia_kgm2 / (2.0 * p.uhat_nm))),
+        arrest_q32: fit(round(Q32 * l.inertia_kgm2 / (2.0 * p.umax_nm))),
+        dac_per_nm_q16: fit(round(Q16 / nm_per_code)),
+        nm_per_dac_q16: fit(round(Q16 * nm_per_code)),
+        k1_q16: fit(round(Q16 * k1)),
+        k2_q8: fit(round(256.0 * k2)),
+        omega_limit_q16: fit(round(Q16 * 2.0 * l.max_speed_rad_s)),
+        linear_band_q16: fit(round(Q16 * p.s_sat_rad)),
     }
 }
 

@@ -7,8 +7,8 @@ use proptest::prelude::*;
 const K1: &LinkConst = &LINKS[0];
 const K2: &LinkConst = &LINKS[1];
 
-fn q16(x: f64) -> i64 {
-    (x * 65536.0).round() as i64
+fn q16(x: f64) -> i32 {
+    (x * 65536.0).round() as i32
 }
 
 #[test]
@@ -151,7 +151,7 @@ fn the_first_pass_only_initialises() {
     assert_eq!(o.dac, [0, 0]);
     assert_eq!(
         s.observers()[0].theta_q16,
-        (1000i64 * K1.rad_per_count_q32) >> 16
+        fx::mul_shr(1000, K1.rad_per_count_q32, 16)
     );
 }
 
@@ -160,12 +160,16 @@ fn the_observer_converges_to_a_ramp() {
     // Link 2 turning at 5 rad/s, sampled at 3 kHz with the encoder's quantisation.
     let mut obs = Observer::default();
     let dt_ticks = 667u16;
-    let dt_q32 = (dt_ticks as i64 * TIMER_TICK_Q40) >> 8;
+    let dt_q32 = fx::mul_shr(dt_ticks as i32, TIMER_TICK_Q40, 8);
     let dt = dt_ticks as f64 / 2e6;
     let counts_per_rad = 8192.0 / std::f64::consts::TAU;
     for n in 1..=300 {
         let theta = 5.0 * dt * n as f64;
-        let y = ((theta * counts_per_rad).floor() as i64 * K2.rad_per_count_q32) >> 16;
+        let y = fx::mul_shr(
+            (theta * counts_per_rad).floor() as i32,
+            K2.rad_per_count_q32,
+            16,
+        );
         obs.update(K2, y, 0, dt_q32);
     }
     let w = obs.omega_q16 as f64 / 65536.0;
@@ -251,7 +255,7 @@ proptest! {
         let (u, _) = law(k, q16(err), q16(w));
         prop_assert!(u.abs() <= k.umax_q16);
         let code = dac_code(k, u);
-        let nm = code as i64 * k.nm_per_dac_q16;
+        let nm = code as i32 * k.nm_per_dac_q16;
         prop_assert!(nm.abs() <= k.umax_q16);
     }
 
@@ -264,7 +268,7 @@ proptest! {
             let sub = fresh.then_some(Subgoal { goal_urad: [g, -g], cycle: i as u32 });
             let o = s.step(&Input { enc: [e0, e1], timer: t, subgoal: sub });
             for (l, k) in LINKS.iter().enumerate() {
-                prop_assert!((o.torque_q16[l] as i64).abs() <= k.umax_q16);
+                prop_assert!(o.torque_q16[l].abs() <= k.umax_q16);
                 prop_assert!((params::DAC_MIN..=params::DAC_MAX).contains(&o.dac[l]));
             }
         }
