@@ -9,6 +9,7 @@
 //! * [`plots`]: PNG pictures of a run.
 //! * [`run`]: a scenario run and its run directory.
 //! * [`scenario`]: scenario files (TOML) and their errors.
+//! * [`servo_bench`]: step responses of the servo against the thesis baselines.
 //! * [`sim`]: the deterministic native-mode simulation: scheduler, world, collision oracle.
 //! * [`docs`]: the generated tables of the memory-map and register documents.
 #![deny(missing_docs)]
@@ -23,6 +24,7 @@ pub mod plant;
 pub mod plots;
 pub mod run;
 pub mod scenario;
+pub mod servo_bench;
 pub mod sim;
 
 /// Names of the five board images, as built by `cargo xtask images`.

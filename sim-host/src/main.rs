@@ -33,7 +33,7 @@ enum Cmd {
         #[arg(long, default_value_t = 1000.0)]
         trace_every_us: f64,
     },
-    /// Measure the simulator: `sim` = real-time factor of the five-board native simulation.
+    /// Measurements: `sim` = real-time factor of the native simulation; `servo` = step responses.
     Bench {
         /// What to measure (sim).
         what: String,
@@ -119,8 +119,12 @@ fn main() -> ExitCode {
                 println!("{r}");
                 ExitCode::SUCCESS
             }
+            "servo" => {
+                print!("{}", sim_host::servo_bench::report_step(1.0 / 3000.0));
+                ExitCode::SUCCESS
+            }
             other => {
-                eprintln!("sim-host: unknown benchmark {other:?} (sim)");
+                eprintln!("sim-host: unknown benchmark {other:?} (sim, servo)");
                 ExitCode::from(2)
             }
         },
