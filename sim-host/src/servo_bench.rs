@@ -260,18 +260,6 @@ fn measure(
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ideal_bang_bang_times_match_the_thesis() {
-        let i = arm::LINK1.inertia_kgm2;
-        assert!((bang_bang_s(3.0, i, 13.0, 13.0) - 0.208).abs() < 0.001);
-        assert!((bang_bang_s(3.0, i, 13.0, 10.5) - 0.2209).abs() < 0.001);
-    }
-}
-
 /// Prints the 3 rad step of link 1 for the servo and the baselines, with the ideal times.
 pub fn report_step(period_s: f64) -> String {
     use std::fmt::Write;
@@ -323,4 +311,16 @@ pub fn report_step(period_s: f64) -> String {
         );
     }
     o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ideal_bang_bang_times_match_the_thesis() {
+        let i = arm::LINK1.inertia_kgm2;
+        assert!((bang_bang_s(3.0, i, 13.0, 13.0) - 0.208).abs() < 0.001);
+        assert!((bang_bang_s(3.0, i, 13.0, 10.5) - 0.2209).abs() < 0.001);
+    }
 }
