@@ -68,34 +68,37 @@ enum Ccr {
     Flow,
 }
 
+/// Whether an instruction's destination (its last operand) is an address register.
+fn to_areg(ops: &str) -> bool {
+    ops.trim_end().rsplit(',').next().is_some_and(|d| {
+        let d = d.trim();
+        d.starts_with("%a") || d == "%sp" || d == "%fp"
+    })
+}
+
+/// Whether an instruction ends straight-line code (branch, jump, call, return, loop).
+fn ends_run(m: &str) -> bool {
+    ["bra", "bsr", "jmp", "jsr", "rt", "db"]
+        .iter()
+        .any(|p| m.starts_with(p))
+}
+
 fn classify(mn: &str, ops: &str) -> Ccr {
     let m = stem(mn);
-    let to_areg = ops
-        .trim_end()
-        .rsplit(',')
-        .next()
-        .is_some_and(|d| d.trim().starts_with("%a") || d.trim() == "%sp" || d.trim() == "%fp");
     if m.starts_with("movea")
         || m.starts_with("movem")
         || m.starts_with("adda")
         || m.starts_with("suba")
-        || m.starts_with("cmpa") && false
     {
         return Ccr::Keeps;
     }
     if ["lea", "pea", "link", "linkw", "unlk", "exg", "nop", "trap"].contains(&m) {
         return Ccr::Keeps;
     }
-    if m.starts_with("bra")
-        || m.starts_with("bsr")
-        || m.starts_with("jmp")
-        || m.starts_with("jsr")
-        || m.starts_with("rt")
-        || m.starts_with("db")
-    {
+    if ends_run(m) {
         return Ccr::Flow;
     }
-    if (m.starts_with("addq") || m.starts_with("subq")) && to_areg {
+    if (m.starts_with("addq") || m.starts_with("subq")) && to_areg(ops) {
         return Ccr::Keeps;
     }
     if m.starts_with("move")
@@ -103,7 +106,7 @@ fn classify(mn: &str, ops: &str) -> Ccr {
     {
         return Ccr::Keeps;
     }
-    if m.starts_with("move") && to_areg {
+    if m.starts_with("move") && to_areg(ops) {
         return Ccr::Keeps; // objdump may print movea as movel to an address register
     }
     if m.starts_with("move") || m.starts_with("clr") {
@@ -150,23 +153,12 @@ enum XEffect {
 
 fn x_effect(mn: &str, ops: &str) -> XEffect {
     let m = stem(mn);
-    let to_areg = ops
-        .trim_end()
-        .rsplit(',')
-        .next()
-        .is_some_and(|d| d.trim().starts_with("%a") || d.trim() == "%sp" || d.trim() == "%fp");
-    if m.starts_with("bra")
-        || m.starts_with("bsr")
-        || m.starts_with("jmp")
-        || m.starts_with("jsr")
-        || m.starts_with("rt")
-        || m.starts_with("db")
-    {
+    if ends_run(m) {
         return XEffect::Flow;
     }
     if m.starts_with("adda")
         || m.starts_with("suba")
-        || ((m.starts_with("addq") || m.starts_with("subq")) && to_areg)
+        || ((m.starts_with("addq") || m.starts_with("subq")) && to_areg(ops))
     {
         return XEffect::Keeps;
     }
