@@ -216,8 +216,10 @@ pub struct SensingIo<O: Optics> {
     select: u8,
     led: LedCtrl,
     started: Option<u64>,
+    /// What the track-and-hold captured at the last start.
     held: Analog,
-    ever: bool,
+    /// The result of the conversion before the current one, once one has completed.
+    previous: Option<Analog>,
 }
 
 impl<O: Optics> SensingIo<O> {
@@ -229,13 +231,22 @@ impl<O: Optics> SensingIo<O> {
             led: LedCtrl::empty(),
             started: None,
             held: Analog::default(),
-            ever: false,
+            previous: None,
         }
     }
 
     fn done(&self, now: u64) -> bool {
         self.started
             .is_some_and(|t| seconds(now) - seconds(t) >= ADC_CONVERSION_S)
+    }
+
+    /// What the data registers hold at `now`: the last completed conversion.
+    fn result(&self, now: u64) -> Option<Analog> {
+        if self.done(now) {
+            Some(self.held)
+        } else {
+            self.previous
+        }
     }
 }
 
@@ -283,14 +294,14 @@ impl<O: Optics> Device for SensingIo<O> {
                 s.bits()
             }
             // Data registers read the last completed conversion (0 before the first).
-            ADC_X | ADC_Y | ADC_SUM if done || self.ever => {
+            ADC_X | ADC_Y | ADC_SUM => self.result(now).map_or(0, |a| {
                 let v = match off {
-                    ADC_X => self.held.x_v,
-                    ADC_Y => self.held.y_v,
-                    _ => self.held.sum_v,
+                    ADC_X => a.x_v,
+                    ADC_Y => a.y_v,
+                    _ => a.sum_v,
                 };
                 adc_code(v).0
-            }
+            }),
             _ => 0,
         })
     }
@@ -304,11 +315,12 @@ impl<O: Optics> Device for SensingIo<O> {
             LED_SELECT => self.select = (val & 7) as u8,
             LED_CTRL => self.led = LedCtrl::from_bits_truncate(val),
             ADC_CTRL if AdcCtrl::from_bits_truncate(val).contains(AdcCtrl::START) => {
-                // Track-and-hold at the start of conversion.
+                // Track-and-hold at the start of conversion; the previous result stays
+                // readable until this one completes.
+                self.previous = self.result(now);
                 let on = self.led.contains(LedCtrl::ENABLE);
                 self.held = self.optics.sample(self.select, on, seconds(now));
                 self.started = Some(now);
-                self.ever = true;
             }
             _ => {}
         }
@@ -472,6 +484,21 @@ mod tests {
             Some(0),
             "-12 V saturates at code 0"
         );
+        // A second conversion: while it runs, the data registers keep the first result.
+        s.write16(sn::LED_SELECT, 5, 100 + conv);
+        s.write16(
+            sn::ADC_CTRL,
+            regs::sensing::AdcCtrl::START.bits(),
+            100 + conv,
+        );
+        assert_eq!(st(&mut s, 100 + conv + 1), AdcStatus::BUSY);
+        assert_eq!(s.read16(sn::ADC_X, 100 + conv + 1), Some(adc_code(3.0).0));
+        assert_eq!(s.read16(sn::ADC_X, 100 + 2 * conv), Some(adc_code(5.0).0));
+        // Before any conversion has completed the data registers read 0.
+        let mut fresh = SensingIo::new(Lit);
+        fresh.write16(sn::LED_CTRL, LedCtrl::ENABLE.bits(), 0);
+        fresh.write16(sn::ADC_CTRL, regs::sensing::AdcCtrl::START.bits(), 0);
+        assert_eq!(fresh.read16(sn::ADC_X, 1), Some(0));
         assert_eq!(adc_code(0.0).0, 2048);
         assert_eq!(adc_code(9.999).0, 4095);
         assert_eq!(adc_code(10.0), (4095, true));
