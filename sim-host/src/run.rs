@@ -10,7 +10,6 @@
 use crate::plots::Sample;
 use crate::scenario::Scenario;
 use crate::sim::Sim;
-use arm::geometry::Pose;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -103,13 +102,7 @@ pub fn trace_row(sim: &mut Sim, out: &mut String) {
     let t = sim.t_s();
     let l = &sim.plant.links;
     let (a, b) = (l[0].state, l[1].state);
-    let pose = Pose::new(a.link_rad, b.link_rad);
-    let clearance = sim
-        .cfg
-        .obstacles
-        .iter()
-        .map(|o| pose.clearance_m(&o.at(t)))
-        .fold(f64::INFINITY, f64::min);
+    let clearance = sim.clearance_m();
     let (tq1, tq2) = (l[0].motor_torque_nm(), l[1].motor_torque_nm());
     let _ = write!(
         out,

@@ -342,6 +342,8 @@ pub struct Sim {
     /// Collision figures so far.
     pub collisions: Collisions,
     in_contact: bool,
+    /// Smallest clearance between the arm and any obstacle at the current time (m).
+    clearance_m: f64,
     /// Obstacle disks at the current time (computed once per step, used by the oracle at
     /// the end of a step and by the beacons at the start of the next).
     disks: Vec<Disk>,
@@ -387,9 +389,11 @@ impl Sim {
                 min_clearance_m: f64::INFINITY,
             },
             in_contact: false,
+            clearance_m: f64::INFINITY,
             disks: Vec::new(),
         };
         sim.disks = sim.cfg.obstacles.iter().map(|o| o.at(0.0)).collect();
+        sim.clearance_m = sim.nearest_clearance();
         sim.sync_devices();
         for i in 0..sim.slots.len() {
             sim.with_board(i, 0, |code, g, io| code.boot(g, io));
@@ -533,17 +537,25 @@ impl Sim {
         }
     }
 
-    fn check_collisions(&mut self) {
-        let t = self.t_s();
+    /// The smallest clearance between the arm's pose and the cached obstacle disks.
+    fn nearest_clearance(&self) -> f64 {
         let [a1, a2] = self.plant.angles_rad();
         let pose = Pose::new(a1, a2);
-        let mut contact = false;
+        self.disks
+            .iter()
+            .map(|d| pose.clearance_m(d))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn check_collisions(&mut self) {
+        let t = self.t_s();
         for (d, o) in self.disks.iter_mut().zip(&self.cfg.obstacles) {
             *d = o.at(t);
-            let c = pose.clearance_m(d);
-            self.collisions.min_clearance_m = self.collisions.min_clearance_m.min(c);
-            contact |= c <= 0.0;
         }
+        let c = self.nearest_clearance();
+        self.clearance_m = c;
+        self.collisions.min_clearance_m = self.collisions.min_clearance_m.min(c);
+        let contact = c <= 0.0;
         if contact {
             self.collisions.steps += 1;
             if !self.in_contact {
@@ -551,6 +563,12 @@ impl Sim {
             }
         }
         self.in_contact = contact;
+    }
+
+    /// Smallest clearance between the arm and any obstacle now (m; infinite without
+    /// obstacles), as the collision oracle computed it.
+    pub fn clearance_m(&self) -> f64 {
+        self.clearance_m
     }
 
     /// Whether the run's duration is over.
