@@ -117,7 +117,6 @@ pub fn run(ctrl: Controller, s: Step) -> Response {
     let mut pd_torque = [0i32; 2];
     let mut volts = [0.0; 2];
     let mut next_ctrl = 0.0;
-    let mut ticks: u64 = 0;
     let mut last_ticks: u64 = 0;
     let mut cycle = 0u32;
     let mut trace = Vec::new();
@@ -127,7 +126,7 @@ pub fn run(ctrl: Controller, s: Step) -> Response {
         let t = n as f64 * DEFAULT_DT_S;
         if t + 1e-12 >= next_ctrl {
             next_ctrl += s.period_s;
-            ticks = (t * 2e6).round() as u64;
+            let ticks = (t * 2e6).round() as u64;
             let enc = [0, 1].map(|i| {
                 let m = plant.links[i].state.motor_rad;
                 (m / count[i]).floor() as i64 as u16
@@ -200,7 +199,6 @@ pub fn run(ctrl: Controller, s: Step) -> Response {
             });
         }
     }
-    let _ = ticks;
     measure(
         &trace,
         &dac_hist,
