@@ -40,6 +40,21 @@ fn err(e: impl std::fmt::Display) -> String {
     e.to_string()
 }
 
+/// Draws the series legend the same way on every chart.
+fn legend<'a, DB: DrawingBackend + 'a>(
+    c: &mut ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+) -> Result<(), String> {
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)
+}
+
 fn range(vals: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in vals {
@@ -88,11 +103,7 @@ pub fn joints(path: &Path, title: &str, s: &[Sample]) -> Result<(), String> {
                 .label(format!("link {}", i + 1))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
         }
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err)?;
+        legend(&mut c)?;
     }
     root.present().map_err(err)
 }
@@ -209,10 +220,6 @@ pub fn task(path: &Path, title: &str, cfg: &Config, s: &[Sample]) -> Result<(), 
             }
         }
     }
-    c.configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
+    legend(&mut c)?;
     root.present().map_err(err)
 }
