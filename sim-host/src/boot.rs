@@ -205,3 +205,67 @@ pub fn boot(dir: &Path, boards: &[BoardId], run_ms: f64) -> Result<Vec<BootRepor
     }
     Ok(out)
 }
+
+/// Where one board's CPU time goes: cycles per function of its image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Profile {
+    /// Emulated cycles profiled.
+    pub cycles: u64,
+    /// Main-loop passes (heartbeats) in that time.
+    pub loops: u64,
+    /// (function, cycles spent in it, not counting its callees), most first.
+    pub functions: Vec<(String, u64)>,
+}
+
+/// Boots `board` alone, waits for its first heartbeat, then executes `ms` milliseconds of
+/// emulated time one instruction at a time, charging each instruction's cycles to the
+/// function (nearest symbol at or below the PC) it belongs to.
+pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageError> {
+    let image = Image::load(&dir.join(format!("{}.elf", image_name(board))))?;
+    let mut syms: Vec<(u32, String)> = image
+        .symbols
+        .iter()
+        .filter(|(n, _)| !n.is_empty() && !n.starts_with('.'))
+        .map(|(n, a)| (*a, n.clone()))
+        .collect();
+    syms.sort();
+    let mut sys = System::power_up(dir, &[board])?;
+    let off = BoardSlot::of(board).heartbeat();
+    let b = &mut sys.boards[0];
+    while b.cycles < CPU_HZ && b.state == RunState::Running {
+        b.step(&mut sys.global);
+        if ArrayBus::new(&mut sys.global).read_u32(off) != 0 {
+            break;
+        }
+    }
+    let hb0 = ArrayBus::new(&mut sys.global).read_u32(off);
+    let end = b.cycles + (ms * CPU_HZ as f64 / 1000.0) as u64;
+    let mut per: std::collections::HashMap<usize, u64> = std::collections::HashMap::new();
+    let start = b.cycles;
+    while b.cycles < end && b.state == RunState::Running {
+        let pc = b.cpu.pc;
+        let c = b.step(&mut sys.global);
+        let i = syms.partition_point(|(a, _)| *a <= pc);
+        *per.entry(i).or_default() += c;
+    }
+    let loops = ArrayBus::new(&mut sys.global)
+        .read_u32(off)
+        .wrapping_sub(hb0) as u64;
+    let mut functions: Vec<(String, u64)> = per
+        .into_iter()
+        .map(|(i, c)| {
+            let name = if i == 0 {
+                "?".to_string()
+            } else {
+                syms[i - 1].1.clone()
+            };
+            (name, c)
+        })
+        .collect();
+    functions.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    Ok(Profile {
+        cycles: b.cycles - start,
+        loops,
+        functions,
+    })
+}

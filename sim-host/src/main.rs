@@ -33,9 +33,10 @@ enum Cmd {
         #[arg(long, default_value_t = 1000.0)]
         trace_every_us: f64,
     },
-    /// Measurements: `sim` = real-time factor of the native simulation; `servo` = step responses.
+    /// Measurements: `sim` = real-time factor of the native simulation (`--seconds`, `--reps`);
+    /// `servo` = step responses against the thesis's baselines, with pictures (`--out`).
     Bench {
-        /// What to measure (sim).
+        /// What to measure (sim, servo).
         what: String,
         /// Simulated seconds per repetition.
         #[arg(long, default_value_t = 10.0)]
@@ -43,6 +44,24 @@ enum Cmd {
         /// Repetitions (the report gives best, median and worst).
         #[arg(long, default_value_t = 5)]
         reps: usize,
+        /// Where `servo` writes its pictures.
+        #[arg(long, default_value = "out/bench-servo")]
+        out: PathBuf,
+    },
+    /// Profile one board image on the emulated 68020: cycles per main-loop pass and the
+    /// functions they go to.
+    Profile {
+        /// A board name (sensing, cspace, servo, reflex, planner).
+        board: String,
+        /// Directory holding `<board>.elf` (written by `cargo xtask images`).
+        #[arg(long)]
+        images: Option<PathBuf>,
+        /// Emulated milliseconds to profile after the first heartbeat.
+        #[arg(long, default_value_t = 10.0)]
+        ms: f64,
+        /// Functions to list.
+        #[arg(long, default_value_t = 15)]
+        top: usize,
     },
     /// Boot board images on emulated 68020s and print each board's heartbeat and status.
     Boot {
@@ -113,21 +132,66 @@ fn main() -> ExitCode {
             what,
             seconds,
             reps,
+            out,
         } => match what.as_str() {
             "sim" => {
                 let r = sim_host::bench::sim(seconds, reps);
                 println!("{r}");
                 ExitCode::SUCCESS
             }
-            "servo" => {
-                print!("{}", sim_host::servo_bench::report_step(1.0 / 3000.0));
-                ExitCode::SUCCESS
-            }
+            "servo" => match sim_host::servo_bench::report(&out) {
+                Ok(r) => {
+                    print!("{r}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("sim-host: bench servo: {e}");
+                    ExitCode::FAILURE
+                }
+            },
             other => {
                 eprintln!("sim-host: unknown benchmark {other:?} (sim, servo)");
                 ExitCode::from(2)
             }
         },
+        Cmd::Profile {
+            board,
+            images,
+            ms,
+            top,
+        } => {
+            let Some(id) = parse_board(&board) else {
+                eprintln!("sim-host: unknown board {board:?} (sensing, cspace, servo, reflex, planner, cspace0..2)");
+                return ExitCode::from(2);
+            };
+            let dir = images.unwrap_or_else(default_images_dir);
+            match sim_host::boot::profile(&dir, id, ms) {
+                Ok(p) => {
+                    let per = p.cycles as f64 / p.loops.max(1) as f64;
+                    println!(
+                        "{board}: {} cycles, {} loops: {per:.0} cycles per loop = {:.0} loops/s at {:.1} MHz",
+                        p.cycles,
+                        p.loops,
+                        CPU_HZ as f64 / per,
+                        CPU_HZ as f64 / 1e6
+                    );
+                    println!("{:>10} {:>6} {:>12}  function", "cycles", "%", "per loop");
+                    for (name, c) in p.functions.iter().take(top) {
+                        println!(
+                            "{c:>10} {:>6.1} {:>12.0}  {:#}",
+                            100.0 * *c as f64 / p.cycles as f64,
+                            *c as f64 / p.loops.max(1) as f64,
+                            rustc_demangle::demangle(name)
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("sim-host: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Cmd::Boot { board, images, ms } => {
             let boards: Vec<BoardId> = if board == "all" {
                 FIVE.to_vec()

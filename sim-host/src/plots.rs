@@ -108,6 +108,47 @@ pub fn joints(path: &Path, title: &str, s: &[Sample]) -> Result<(), String> {
     root.present().map_err(err)
 }
 
+/// Writes one chart of several named series against time (the servo bench's figures, like
+/// thesis figs. III.3-III.6 with the baselines overlaid); `y` fixes the vertical range
+/// (otherwise it fits the data).
+pub fn overlay(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    y: Option<std::ops::Range<f64>>,
+) -> Result<(), String> {
+    font()?;
+    let root = BitMapBackend::new(path, (1000, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let x = range(series.iter().flat_map(|(_, v)| v.iter().map(|p| p.0)));
+    let y = y.unwrap_or_else(|| range(series.iter().flat_map(|(_, v)| v.iter().map(|p| p.1))));
+    let mut c = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x, y.clone())
+        .map_err(err)?;
+    c.configure_mesh()
+        .x_desc("time (s)")
+        .y_desc(y_label)
+        .draw()
+        .map_err(err)?;
+    let colors = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK, BLACK];
+    for (k, (name, v)) in series.iter().enumerate() {
+        let color = colors[k % colors.len()];
+        // Points outside a fixed range are clipped to its edge rather than drawn off the chart.
+        let pts = v.iter().map(|&(t, yv)| (t, yv.clamp(y.start, y.end)));
+        c.draw_series(LineSeries::new(pts, color))
+            .map_err(err)?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+    }
+    legend(&mut c)?;
+    root.present().map_err(err)
+}
+
 /// The outline of the arm at `theta` as polygons in the plane.
 fn outline(theta: [f64; 2]) -> Vec<Vec<(f64, f64)>> {
     let (e, _) = (arm::geometry::elbow(theta[0]), ());

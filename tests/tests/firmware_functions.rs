@@ -163,3 +163,88 @@ fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
         assert_eq!(got as i32, want, "mul_shr({a}, {bb}, {sh})");
     }
 }
+
+#[test]
+fn the_fixed_point_divide_matches_the_host_bit_for_bit() {
+    let img = Image::load(&images_dir().join("servo.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut b = EmuBoard::new(
+        BoardId::Servo,
+        &img,
+        sim_host::devices::standalone(BoardId::Servo),
+        &mut global,
+    );
+    let f = img.symbol("__fx_div").expect("__fx_div in the servo image");
+    let mut rng = sim_host::sim::Rng::new(7);
+    let edge = [
+        0,
+        1,
+        -1,
+        3,
+        -3,
+        65536,
+        -65536,
+        i32::MAX,
+        i32::MIN,
+        1 << 30,
+        -(1 << 30),
+    ];
+    let mut cases = Vec::new();
+    for &n in &edge {
+        for &d in &edge {
+            for sh in [0, 1, 16, 24, 31] {
+                cases.push((n, d, sh));
+            }
+        }
+    }
+    for _ in 0..3000 {
+        let n = rng.next_u64() as i32 >> (rng.next_u64() % 31);
+        let d = rng.next_u64() as i32 >> (rng.next_u64() % 31);
+        let sh = (rng.next_u64() % 32) as u32;
+        cases.push((n, d, sh));
+    }
+    for (n, d, sh) in cases {
+        let (got, _) = b
+            .call(&mut global, f, &[n as u32, d as u32, sh], 10_000)
+            .unwrap();
+        let want = servo::fx::host_div_shl(n, d, sh);
+        assert_eq!(got as i32, want, "div_shl({n}, {d}, {sh})");
+    }
+}
+
+#[test]
+fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
+    let img = Image::load(&images_dir().join("servo.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut b = EmuBoard::new(
+        BoardId::Servo,
+        &img,
+        sim_host::devices::standalone(BoardId::Servo),
+        &mut global,
+    );
+    let f = img
+        .symbol("__fx_sqrt_q16")
+        .expect("__fx_sqrt_q16 in the servo image");
+    let mut rng = sim_host::sim::Rng::new(11);
+    let mut cases = vec![
+        0,
+        1,
+        2,
+        3,
+        4,
+        -1,
+        i32::MIN,
+        i32::MAX,
+        65535,
+        65536,
+        65537,
+        1 << 30,
+    ];
+    for _ in 0..3000 {
+        cases.push(rng.next_u64() as i32 >> (rng.next_u64() % 32));
+    }
+    for x in cases {
+        let (got, _) = b.call(&mut global, f, &[x as u32], 10_000).unwrap();
+        assert_eq!(got as i32, servo::fx::host_sqrt_q16(x), "sqrt_q16({x})");
+    }
+}

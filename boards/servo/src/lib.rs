@@ -32,11 +32,17 @@ impl Default for Board {
 }
 
 impl Board {
-    /// A fresh board.
+    /// A fresh board running the law designed for 3 kHz (the native simulation's rate).
     pub const fn new() -> Self {
+        Self::with_links(&servo::params::TUNED)
+    }
+
+    /// A fresh board running the law with constants `links`, which must be designed for the
+    /// rate the board's loop runs at (the image: [`servo::params::TUNED_AT_IMAGE_HZ`]).
+    pub const fn with_links(links: &'static [servo::params::LinkConst; 2]) -> Self {
         Self {
             shell: Shell::new(BoardId::Servo),
-            servo: Servo::new(),
+            servo: Servo::with_links(links),
             ticks: 0,
             loops: 0,
         }
@@ -79,7 +85,9 @@ impl Board {
         }
         self.ticks += out.period_ticks as u64;
         self.loops = self.loops.wrapping_add(1);
-        let mnm = |q: i32| ((q as i64 * 1000) >> 16) as i32;
+        // Q16 N m to mN m in 32 bits: torques are within umax (13 N m, < 2^20 in Q16), so the
+        // product stays below 2^31 (an i64 product here cost a __muldi3 call per pass).
+        let mnm = |q: i32| (q * 1000) >> 16;
         let state = ServoState {
             theta1_urad: q16_to_urad(out.theta_q16[0]),
             theta2_urad: q16_to_urad(out.theta_q16[1]),

@@ -165,6 +165,80 @@ __vme_cas32:                    /* u32 __vme_cas32(u32 *addr, u32 current, u32 n
  * i32 __fx_mul_shr(i32 a, i32 b, u32 sh), 1 <= sh <= 32:
  *   round((a * b) >> sh), saturated to i32: the 64-bit product of MULS.L, plus 1 << (sh-1),
  *   arithmetic shift right. Bit-identical to the host version in crates/servo/src/fx.rs. */
+/* i32 __fx_div(i32 num, i32 den, u32 sh), 0 <= sh <= 31:
+ *   (num * 2^sh) / den truncated toward zero, saturated to i32; den = 0 gives i32::MAX for
+ *   num >= 0 and i32::MIN otherwise. DIVS.L divides the 64-bit dividend in two registers.
+ *   Bit-identical to the host version in crates/servo/src/fx.rs. */
+    .section .text.__fx_div, "ax"
+    .globl __fx_div
+__fx_div:
+    movem.l %d2-%d3, -(%sp)     /* arguments now at 12, 16, 20 */
+    move.l  12(%sp), %d0        /* num */
+    move.l  20(%sp), %d2        /* sh */
+    move.l  %d0, %d1
+    moveq   #32, %d3
+    sub.l   %d2, %d3
+    asr.l   %d3, %d1            /* high word: num >> (32 - sh), all sign bits when sh = 0 */
+    lsl.l   %d2, %d0            /* low word: num << sh */
+    move.l  16(%sp), %d3        /* den */
+    tst.l   %d3
+    beq.s   2f
+    divs.l  %d3, %d1:%d0        /* d0 = quotient, d1 = remainder */
+    bvc.s   3f
+    move.l  12(%sp), %d0        /* overflow: saturate toward the quotient's sign */
+    eor.l   %d3, %d0
+    bra.s   4f
+2:  move.l  12(%sp), %d0        /* division by zero: saturate toward num's sign */
+4:  tst.l   %d0
+    bmi.s   5f
+    move.l  #0x7fffffff, %d0
+    bra.s   3f
+5:  move.l  #0x80000000, %d0
+3:  movem.l (%sp)+, %d2-%d3
+    rts
+
+/* i32 __fx_sqrt_q16(i32 x): the square root of a non-negative Q16 value in Q16, 0 for
+ *   x <= 0. The input is shifted left by the largest even amount s <= 16 that keeps it in 32
+ *   bits (BFFFO finds the leading zeros), the integer root is taken digit by digit (16
+ *   rounds of compare, subtract and shift) and shifted left by (16 - s) / 2.
+ *   Bit-identical to host_sqrt_q16 in crates/servo/src/fx.rs. */
+    .section .text.__fx_sqrt_q16, "ax"
+    .globl __fx_sqrt_q16
+__fx_sqrt_q16:
+    movem.l %d2-%d4, -(%sp)     /* argument now at 16 */
+    move.l  16(%sp), %d0        /* x */
+    tst.l   %d0
+    ble.s   9f
+    bfffo   %d0{#0:#32}, %d4    /* leading zeros, 0..31 */
+    andi.l  #30, %d4            /* even */
+    cmpi.l  #16, %d4
+    bls.s   1f
+    moveq   #16, %d4
+1:  lsl.l   %d4, %d0            /* n = x << s */
+    moveq   #0, %d1             /* r */
+    move.l  #0x40000000, %d2    /* bit */
+2:  move.l  %d1, %d3
+    add.l   %d2, %d3            /* r + bit */
+    cmp.l   %d3, %d0
+    bcs.s   3f                  /* n < r + bit (unsigned) */
+    sub.l   %d3, %d0
+    lsr.l   #1, %d1
+    add.l   %d2, %d1
+    bra.s   4f
+3:  lsr.l   #1, %d1
+4:  lsr.l   #2, %d2
+    tst.l   %d2
+    bne.s   2b
+    moveq   #16, %d0
+    sub.l   %d4, %d0
+    lsr.l   #1, %d0             /* (16 - s) / 2 */
+    lsl.l   %d0, %d1
+    move.l  %d1, %d0
+    bra.s   8f
+9:  moveq   #0, %d0
+8:  movem.l (%sp)+, %d2-%d4
+    rts
+
     .section .text.__fx_mul_shr, "ax"
     .globl __fx_mul_shr
 __fx_mul_shr:

@@ -28,6 +28,19 @@ pub const fn cos(x: f64) -> f64 {
     sum
 }
 
+/// sin x by its Taylor series (|x| < 2), for const contexts.
+pub const fn sin(x: f64) -> f64 {
+    let mut sum = x;
+    let mut term = x;
+    let mut n = 1.0;
+    while n < 40.0 {
+        term = -term * x * x / ((2.0 * n) * (2.0 * n + 1.0));
+        sum += term;
+        n += 1.0;
+    }
+    sum
+}
+
 /// sqrt by Newton's method, for const contexts (x > 0).
 pub const fn sqrt(x: f64) -> f64 {
     let mut r = if x > 1.0 { x } else { 1.0 };
@@ -62,6 +75,7 @@ mod tests {
         for x in [-1.5, -0.3, 0.0, 0.2, 1.0, 1.9] {
             assert!((exp(x) - f64::exp(x)).abs() < 1e-14 * f64::exp(x).max(1.0));
             assert!((cos(x) - f64::cos(x)).abs() < 1e-14);
+            assert!((sin(x) - f64::sin(x)).abs() < 1e-14);
         }
         for x in [1e-6, 0.5, 2.0, 400000.0] {
             assert!((sqrt(x) - f64::sqrt(x)).abs() < 1e-12 * f64::sqrt(x).max(1.0));

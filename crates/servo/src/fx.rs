@@ -1,8 +1,10 @@
-//! The servo's one wide operation: `mul_shr(a, b, sh)` = round((a b) >> sh), saturated to
-//! `i32`, for Q-format products.
+//! The servo's two wide operations, for Q-format arithmetic in `i32`:
+//! `mul_shr(a, b, sh)` = round((a b) >> sh) and `div_shl(n, d, sh)` = (n 2^sh) / d, both
+//! saturated to `i32`.
 //!
-//! On the 68020 it is `__fx_mul_shr` in the runtime's assembly (`crates/rt/asm/rt.S`): MULS.L
-//! gives the 64-bit product in two registers. Compiled 64-bit code is avoided because
+//! On the 68020 they are `__fx_mul_shr` and `__fx_div` in the runtime's assembly
+//! (`crates/rt/asm/rt.S`): MULS.L gives the 64-bit product in two registers, DIVS.L divides
+//! a 64-bit dividend. Compiled 64-bit code is avoided because
 //! LLVM's M68k backend miscompiles its compare sequences (docs/toolchain.md). On the host it
 //! is the same arithmetic in `i64`; a system test runs both on the same inputs and requires
 //! identical bits.
@@ -25,6 +27,35 @@ pub fn mul_shr(a: i32, b: i32, sh: u32) -> i32 {
     }
 }
 
+/// (num * 2^sh) / den truncated toward zero, saturated to `i32`; `sh` in 0..=31. A zero
+/// `den` saturates toward the sign of `num` (`i32::MAX` for 0).
+#[inline]
+pub fn div_shl(num: i32, den: i32, sh: u32) -> i32 {
+    debug_assert!(sh <= 31);
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __fx_div(num: i32, den: i32, sh: u32) -> i32;
+        }
+        // SAFETY: a pure function in the runtime's assembly, linked into every image.
+        unsafe { __fx_div(num, den, sh) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        host_div_shl(num, den, sh)
+    }
+}
+
+/// The host implementation of [`div_shl`] (the reference the image's assembly is tested
+/// against).
+pub fn host_div_shl(num: i32, den: i32, sh: u32) -> i32 {
+    if den == 0 {
+        return if num >= 0 { i32::MAX } else { i32::MIN };
+    }
+    let q = ((num as i64) << sh) / den as i64;
+    q.clamp(i32::MIN as i64, i32::MAX as i64) as i32
+}
+
 /// The host implementation (also the reference the image's assembly is tested against).
 pub fn host_mul_shr(a: i32, b: i32, sh: u32) -> i32 {
     let p = a as i64 * b as i64 + (1i64 << (sh - 1));
@@ -36,6 +67,57 @@ pub fn host_mul_shr(a: i32, b: i32, sh: u32) -> i32 {
     } else {
         r as i32
     }
+}
+
+/// floor(sqrt(n)) by the digit-by-digit method: 16 rounds of shifts, adds and compares in
+/// 32 bits (no multiply or divide), as `__fx_sqrt_q16` does them.
+pub fn isqrt_u32(n: u32) -> u32 {
+    let mut x = n;
+    let mut r = 0u32;
+    let mut bit = 1u32 << 30;
+    while bit != 0 {
+        if x >= r + bit {
+            x -= r + bit;
+            r = (r >> 1) + bit;
+        } else {
+            r >>= 1;
+        }
+        bit >>= 2;
+    }
+    r
+}
+
+/// The square root of a non-negative Q16 value, in Q16 (negative input gives 0). Exact to
+/// the last bit below 1.0, and to 2^-(leading zeros / 2) relative above it: the input is
+/// shifted left by the largest even amount that fits before the root is taken.
+///
+/// On the 68020 it is `__fx_sqrt_q16` in the runtime's assembly (the compiled loop carried a
+/// condition-code clobber, docs/toolchain.md).
+#[inline]
+pub fn sqrt_q16(x_q16: i32) -> i32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __fx_sqrt_q16(x: i32) -> i32;
+        }
+        // SAFETY: a pure function in the runtime's assembly, linked into every image.
+        unsafe { __fx_sqrt_q16(x_q16) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        host_sqrt_q16(x_q16)
+    }
+}
+
+/// The host implementation of [`sqrt_q16`] (the reference the image's assembly is tested
+/// against).
+pub fn host_sqrt_q16(x_q16: i32) -> i32 {
+    if x_q16 <= 0 {
+        return 0;
+    }
+    let x = x_q16 as u32;
+    let s = (x.leading_zeros() & !1).min(16);
+    (isqrt_u32(x << s) << ((16 - s) / 2)) as i32
 }
 
 #[cfg(test)]
@@ -51,5 +133,47 @@ mod tests {
         assert_eq!(host_mul_shr(i32::MIN, i32::MAX, 1), i32::MIN);
         assert_eq!(host_mul_shr(i32::MIN, i32::MIN, 32), 1 << 30);
         assert_eq!(host_mul_shr(-1, 1, 32), 0);
+    }
+
+    #[test]
+    fn divides_truncates_and_saturates() {
+        assert_eq!(host_div_shl(7, 2, 0), 3);
+        assert_eq!(host_div_shl(-7, 2, 0), -3); // toward zero
+        assert_eq!(host_div_shl(1, 3, 16), 21845);
+        assert_eq!(host_div_shl(i32::MIN, -1, 0), i32::MAX);
+        assert_eq!(host_div_shl(1 << 20, 1, 16), i32::MAX);
+        assert_eq!(host_div_shl(-(1 << 20), 1, 16), i32::MIN);
+        assert_eq!(host_div_shl(0, 0, 5), i32::MAX);
+        assert_eq!(host_div_shl(-1, 0, 5), i32::MIN);
+    }
+
+    #[test]
+    fn square_roots() {
+        for n in [
+            0u32,
+            1,
+            2,
+            3,
+            4,
+            15,
+            16,
+            17,
+            65535,
+            65536,
+            1 << 30,
+            u32::MAX,
+        ] {
+            let r = isqrt_u32(n) as u64;
+            assert!(r * r <= n as u64 && (r + 1) * (r + 1) > n as u64, "{n}");
+        }
+        let q = |x: f64| (x * 65536.0).round() as i32;
+        assert_eq!(sqrt_q16(q(4.0)), q(2.0));
+        assert_eq!(sqrt_q16(q(0.25)), q(0.5));
+        assert_eq!(sqrt_q16(-5), 0);
+        for x in [1e-4, 0.01, 0.7, 1.0, 2.0, 123.4, 30000.0] {
+            let got = sqrt_q16(q(x)) as f64 / 65536.0;
+            let want = (q(x) as f64 / 65536.0).sqrt();
+            assert!((got - want).abs() <= 1e-4 * want.max(1.0), "{x}: {got}");
+        }
     }
 }

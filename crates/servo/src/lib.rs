@@ -1,6 +1,8 @@
 //! The servo board's logic (thesis ch. III and Appendix A): per link a Luenberger velocity
 //! observer and the sliding-mode near time-optimal control law III.36, both links in one
-//! `step`; the arrest point the reflexes need (ch. V); torque-to-DAC scaling.
+//! `step`; the arrest point the reflexes need (ch. V); torque-to-DAC scaling. Beyond the
+//! thesis (module [`params`], docs/servo.md): an on-line inertia estimate for the switching
+//! curve, a notch at the first resonance, and friction compensation near the goal.
 //!
 //! Everything runs in fixed point: angles and velocities in Q16 (`_q16`: units of 2^-16 rad,
 //! rad/s, N m) in `i32`, every wide product through [`fx::mul_shr`] (MULS.L in assembly on the
@@ -25,8 +27,8 @@ pub mod consts;
 pub mod fx;
 pub mod params;
 
-use fx::mul_shr;
-use params::{LinkConst, LINKS, TIMER_TICK_Q40};
+use fx::{div_shl, mul_shr, sqrt_q16};
+use params::{LinkConst, TIMER_TICK_Q40};
 
 /// One fixed-point unit (1.0 in Q16).
 pub const ONE_Q16: i32 = 1 << 16;
@@ -58,10 +60,11 @@ fn signed_square(omega_q16: i32, c_q32: i32) -> i32 {
     mul_shr(wc_q24, omega_q16.saturating_abs(), 24)
 }
 
-/// Law III.36 for one link: the torque (Q16 N m) for a position error and velocity.
+/// Law III.36 for one link: the torque (Q16 N m) for a position error and velocity, with
+/// the switching curve's I / (2 u^) given as `brake_q32` (Q32 s^2/rad).
 #[inline(never)]
-pub fn law(k: &LinkConst, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
-    let s = err_q16.saturating_add(signed_square(omega_q16, k.brake_q32)); // Q16 rad
+pub fn law(k: &LinkConst, brake_q32: i32, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
+    let s = err_q16.saturating_add(signed_square(omega_q16, brake_q32)); // Q16 rad
     let x1 = mul_shr(omega_q16, k.inv_omega_sat_q16, 16).clamp(-ONE_Q16, ONE_Q16);
     let x2 = mul_shr(s, k.inv_s_sat_q16, 16).clamp(-ONE_Q16, ONE_Q16);
     let arg = mul_shr(k.uhat_over_umax_q16, x1 + mul_shr(k.eps_q16, x2, 16), 16);
@@ -79,11 +82,211 @@ pub fn law(k: &LinkConst, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
     (-mul_shr(k.umax_q16, sat, 16), regime)
 }
 
-/// Where a link stops under full braking from (`theta`, `omega`): the arrest point of
-/// thesis ch. V, theta + omega |omega| / (2 umax / I).
+/// The proximate form of law III.36 that the board runs (beyond the thesis; Workman's
+/// proximate time-optimal servo, 1987): the command is
+///
+/// ```text
+/// u = -umax sat{ b (omega - f(theta_err)) / umax }
+/// f(e) = -(K/b) e                              |e| <= y_l   (the PD's no-overshoot line)
+/// f(e) = -sign(e) (sqrt(2 A |e|) - c)          |e| >  y_l   (the braking curve, offset)
+/// A = u^ / I,   c = 2A b / (4K),   y_l = 2A (b / 2K)^2
+/// ```
+///
+/// Far from the goal it is III.36: full torque until the switching curve of braking at u^,
+/// then sliding down it. III.36 as printed lets its command fall below u^ once the speed is
+/// under omega_sat, so the link falls behind the curve and overshoots near the goal (the
+/// thesis's 1.7 mrad, more with a stiffer near-goal loop); here the curve is offset by c and
+/// joins the near-goal PD's line with the same slope, so the link arrives on the line along
+/// which the critically damped PD does not overshoot. K and b are III.36's near-goal gains
+/// (u^ eps / s_sat, u^ / omega_sat); `two_a_q16` is 2 u^ / I with the estimated inertia.
 #[inline(never)]
-pub fn arrest_point(k: &LinkConst, theta_q16: i32, omega_q16: i32) -> i32 {
-    theta_q16.saturating_add(signed_square(omega_q16, k.arrest_q32))
+pub fn proximate_law(k: &LinkConst, two_a_q16: i32, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
+    let d = err_q16.saturating_abs();
+    let yl = mul_shr(two_a_q16, k.yl_per_two_a_q32, 32);
+    let linear = d <= yl;
+    let f = if linear {
+        -mul_shr(err_q16, k.slope_q16, 16)
+    } else {
+        let c = mul_shr(two_a_q16, k.c_per_two_a_q32, 32);
+        let v = sqrt_q16(mul_shr(two_a_q16, d, 16)) - c;
+        if err_q16 > 0 {
+            -v
+        } else {
+            v
+        }
+    };
+    let arg = mul_shr(k.b_q16, f.saturating_sub(omega_q16), 16);
+    let u = arg.clamp(-k.umax_q16, k.umax_q16);
+    let regime = if u != arg {
+        Regime::Saturated
+    } else if linear {
+        Regime::Linear
+    } else {
+        Regime::Sliding
+    };
+    (u, regime)
+}
+
+/// Where a link stops when the law brakes from (`theta`, `omega`): the arrest point of
+/// thesis ch. V, theta + omega |omega| I / (2 u), with `brake_q32` = I / (2 u).
+///
+/// The thesis takes u = umax; the servo publishes it with the u^ its switching curve
+/// actually brakes at (and the estimated inertia), which lies a little further out and is
+/// where the arm really stops when it holds, so the reflex's region is never too small.
+#[inline(never)]
+pub fn arrest_point(brake_q32: i32, theta_q16: i32, omega_q16: i32) -> i32 {
+    theta_q16.saturating_add(signed_square(omega_q16, brake_q32))
+}
+
+/// Near-goal corrections (beyond the thesis), applied to the law's torque `u_q16`:
+///
+/// * at rest within the dead band of the goal ([`params::DEADBAND_COUNTS`]), only the law's
+///   damping acts:
+///   the link rests where friction holds it instead of hunting between counts (a position
+///   gain stiff enough to be fast moves the link a whole count against its breakaway
+///   friction, and would limit-cycle across the goal);
+/// * Coulomb friction compensation: while the link moves, the friction torque in the
+///   direction of motion; at rest outside the dead band, the friction torque in the
+///   direction the law pushes (a smooth sign over 0.1 N m so tiny commands do not chatter).
+///
+/// Both are off for constants without a dead band (the thesis's law).
+#[inline(never)]
+pub fn near_goal(k: &LinkConst, u_q16: i32, err_q16: i32, omega_q16: i32) -> i32 {
+    if k.deadband_q16 == 0 {
+        return u_q16;
+    }
+    let moving = omega_q16.saturating_abs() > k.moving_q16;
+    if !moving && err_q16.saturating_abs() <= k.deadband_q16 {
+        return -mul_shr(k.b_q16, omega_q16, 16);
+    }
+    let dir_q16 = if omega_q16 > k.moving_q16 {
+        ONE_Q16
+    } else if omega_q16 < -k.moving_q16 {
+        -ONE_Q16
+    } else {
+        // u / 0.1 N m, clamped to +-1.
+        mul_shr(u_q16, 10 * ONE_Q16, 16).clamp(-ONE_Q16, ONE_Q16)
+    };
+    u_q16
+        .saturating_add(mul_shr(k.friction_comp_q16, dir_q16, 16))
+        .clamp(-k.umax_q16, k.umax_q16)
+}
+
+/// The notch at a link's first resonance, on the commanded torque (beyond the thesis).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Notch {
+    x1: i32,
+    x2: i32,
+    y1: i32,
+    y2: i32,
+}
+
+impl Notch {
+    /// Filters one torque sample (Q16 N m); identity when the link has no notch.
+    #[inline(never)]
+    pub fn filter(&mut self, k: &LinkConst, x_q16: i32) -> i32 {
+        let Some((b0, a1, a2)) = k.notch_q28 else {
+            return x_q16;
+        };
+        // Plain adds: the input is a torque within +-umax (2^20 in Q16) and the notch's
+        // gain is at most a few, so no sum comes near 2^31. (Saturating adds here compiled
+        // to a condition-code clobber on the 68k; docs/toolchain.md.)
+        let y = mul_shr(b0, x_q16 + self.x2, 28) + mul_shr(a1, self.x1 - self.y1, 28)
+            - mul_shr(a2, self.y2, 28);
+        self.x2 = self.x1;
+        self.x1 = x_q16;
+        self.y2 = self.y1;
+        self.y1 = y;
+        y
+    }
+}
+
+/// The on-line inertia estimate of one link (beyond the thesis): while the law accelerates
+/// the link at full torque, the impulse applied over the velocity gained is the inertia
+/// (friction makes it a little larger, the safe side for braking). It sets the switching
+/// curve's I / (2 u^).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InertiaEstimate {
+    /// The switching curve's I / (2 u^), Q32 s^2/rad.
+    pub brake_q32: i32,
+    /// The braking curve's 2 u^ / I, Q16 rad/s^2 (for [`proximate_law`]).
+    pub two_a_q16: i32,
+    /// The last accepted inertia, Q32 kg m^2 (0 until one is accepted).
+    pub inertia_q32: i32,
+    active: bool,
+    impulse_q16: i32,
+    omega0_q16: i32,
+}
+
+impl InertiaEstimate {
+    /// The nominal curve of link constants `k`.
+    pub const fn new(k: &LinkConst) -> Self {
+        Self {
+            brake_q32: k.brake_q32,
+            two_a_q16: k.two_a_q16,
+            inertia_q32: 0,
+            active: false,
+            impulse_q16: 0,
+            omega0_q16: 0,
+        }
+    }
+
+    /// Accounts for one pass: `accelerating` when the torque `applied_q16` is full and pushes
+    /// the way the link turns; `prev_applied_q16` is the torque that acted over the `dt_q32`
+    /// that just ended.
+    #[inline(never)]
+    pub fn observe(
+        &mut self,
+        k: &LinkConst,
+        accelerating: bool,
+        prev_applied_q16: i32,
+        omega_q16: i32,
+        dt_q32: i32,
+    ) {
+        if k.adapt_min_dw_q16 == 0 || !accelerating {
+            self.active = false;
+            return;
+        }
+        if !self.active {
+            self.active = true;
+            self.impulse_q16 = 0;
+            self.omega0_q16 = omega_q16;
+            return;
+        }
+        // Plain arithmetic (saturating forms compiled to condition-code clobbers on the 68k,
+        // docs/toolchain.md): the velocities are clamped by the observer to twice the speed
+        // limit (< 2^26 in Q16) and the impulse grows by at most umax x 10 ms per pass and
+        // is restarted on every new acceleration; a full-torque phase is far shorter than
+        // the 2^31 / (umax x 3 kHz) passes it would take to overflow.
+        self.impulse_q16 += mul_shr(prev_applied_q16, dt_q32.min(MAX_DT_Q32), 32);
+        let dw = omega_q16 - self.omega0_q16;
+        if dw.abs() < k.adapt_min_dw_q16 {
+            return;
+        }
+        // (impulse 2^16 2 2^31) / (dw 2^16) = I in Q32.
+        let i = div_shl(self.impulse_q16 * 2, dw, 31);
+        let (lo, hi) = k.inertia_bounds_q32;
+        if i >= lo && i <= hi {
+            self.inertia_q32 = i;
+            self.brake_q32 = mul_shr(i, k.inv_two_uhat_q24, 24);
+            // (u^ 2^16 2^31) / (I 2^30) = 2 u^ / I in Q16.
+            self.two_a_q16 = div_shl(k.uhat_q16, i >> 2, 31);
+        }
+    }
+}
+
+/// Whether DAC code `code` is full torque in the direction the link turns (`omega_q16`).
+/// (Branches, not `signum`: the product form compiled to a condition-code clobber on the
+/// 68k in `Servo::step`; docs/toolchain.md.)
+#[inline(never)]
+pub fn pushes_at_full_torque(code: i16, omega_q16: i32) -> bool {
+    if omega_q16 > 0 {
+        code >= params::DAC_MAX
+    } else if omega_q16 < 0 {
+        code <= -params::DAC_MAX
+    } else {
+        false
+    }
 }
 
 /// The DAC code for a torque (Q16 N m) on a link: never beyond the 12-bit range, and the
@@ -94,43 +297,77 @@ pub fn dac_code(k: &LinkConst, torque_q16: i32) -> i16 {
         as i16
 }
 
-/// Largest plausible difference between measurement and estimate: 0.01 rad (Q16), some
-/// fifty link-1 counts, far beyond what a link can move unobserved in one loop.
+/// Largest plausible difference between measurement and estimate beyond the distance the
+/// link can travel in the period: 0.01 rad (Q16), some fifty link-1 counts.
 pub const MAX_INNOVATION_Q16: i32 = 655;
 /// Longest period the observer integrates over in one update: 10 ms (Q32 s).
 pub const MAX_DT_Q32: i32 = 42_949_673;
+/// Time after start-up before the observers count as locked (30 ms, Q32 s): some six
+/// time constants of their 100 Hz, zeta 0.71 error dynamics.
+pub const OBSERVER_SETTLE_Q32: i32 = 128_849_019;
 
 /// The Luenberger observer of one link (Appendix A): position and velocity estimates driven
 /// by the measured position and the commanded torque.
+///
+/// The position estimate is kept in Q24 (2^-24 rad): in Q16 a velocity estimate below one
+/// LSB per period (0.005 rad/s at 3 kHz) moves the estimate by nothing, so a link at rest
+/// could keep a phantom velocity that the law then damps against, holding torque forever.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Observer {
-    /// Estimated angle, Q16 rad.
-    pub theta_q16: i32,
+    theta_q24: i32,
     /// Estimated velocity, Q16 rad/s.
     pub omega_q16: i32,
 }
 
 impl Observer {
+    /// An observer locked onto angle `theta_q16` at rest.
+    pub const fn at(theta_q16: i32) -> Self {
+        Self {
+            theta_q24: theta_q16 << 8,
+            omega_q16: 0,
+        }
+    }
+
+    /// Estimated angle, Q16 rad.
+    pub fn theta_q16(&self) -> i32 {
+        mul_shr(self.theta_q24, 1, 8)
+    }
+
     /// Advances by `dt_q32` seconds (Q32) with measurement `y_q16` and the torque `u_q16` that
     /// was applied over the interval.
     ///
-    /// An innovation beyond [`MAX_INNOVATION_Q16`] is implausible (an encoder glitch or a
-    /// restart): the observer re-locks onto the measurement at rest instead of integrating
-    /// it. The period is bounded by [`MAX_DT_Q32`].
+    /// An innovation beyond what the link can travel in the period plus
+    /// [`MAX_INNOVATION_Q16`] is implausible (an encoder glitch): the observer re-locks onto
+    /// the measurement at rest instead of integrating it. The period is bounded by
+    /// [`MAX_DT_Q32`].
     #[inline(never)]
     pub fn update(&mut self, k: &LinkConst, y_q16: i32, u_q16: i32, dt_q32: i32) {
-        let e = y_q16.saturating_sub(self.theta_q16);
-        if e.saturating_abs() > MAX_INNOVATION_Q16 {
-            *self = Observer {
-                theta_q16: y_q16,
-                omega_q16: 0,
-            };
+        let e = y_q16.saturating_mul(256).saturating_sub(self.theta_q24); // Q24 rad
+        let dt = dt_q32.min(MAX_DT_Q32);
+        // Implausible: further than the link can move in the period at twice its speed
+        // limit, plus 0.01 rad. (A fixed bound would keep re-locking, at rest, an observer
+        // started while the link was already turning fast.)
+        let bound = mul_shr(k.omega_limit_q16, dt, 32).saturating_add(MAX_INNOVATION_Q16);
+        if e.saturating_abs() > bound.saturating_mul(256) {
+            *self = Observer::at(y_q16);
             return;
         }
-        let dt = dt_q32.min(MAX_DT_Q32);
-        let dtheta = self.omega_q16 + mul_shr(k.k1_q16, e, 16); // Q16 rad/s
-        let accel = mul_shr(u_q16, k.inv_inertia_q16, 16) + mul_shr(k.k2_q8, e, 8); // Q16 rad/s^2
-        self.theta_q16 = self.theta_q16.saturating_add(mul_shr(dtheta, dt, 32));
+        // The torque that accelerates the link: the commanded one less the friction the law
+        // compensates for (when it does). Without this, a link held by friction while the
+        // law pushes makes the observer see a velocity that is not there, which cancels
+        // part of the law's position term and leaves the link stuck counts from the goal.
+        let f = k.friction_comp_q16;
+        let friction = if self.omega_q16 > k.moving_q16 {
+            f
+        } else if self.omega_q16 < -k.moving_q16 {
+            -f
+        } else {
+            u_q16.clamp(-f, f)
+        };
+        let net = u_q16.saturating_sub(friction);
+        let dtheta = self.omega_q16 + mul_shr(k.k1_q16, e, 24); // Q16 rad/s
+        let accel = mul_shr(net, k.inv_inertia_q16, 16) + mul_shr(k.k2_q8, e, 16); // Q16 rad/s^2
+        self.theta_q24 = self.theta_q24.saturating_add(mul_shr(dtheta, dt, 24));
         // Physical bound: no link turns faster than its motors' speed limit (x2 margin).
         self.omega_q16 = self
             .omega_q16
@@ -211,10 +448,14 @@ pub struct Servo {
     last_enc: [u16; 2],
     counts: [i32; 2],
     last_timer: u16,
+    links: &'static [LinkConst; 2],
     obs: [Observer; 2],
+    est: [InertiaEstimate; 2],
+    notch: [Notch; 2],
     torque_q16: [i32; 2],
     last_cycle: Option<u32>,
     since_cycle_q32: i32,
+    since_start_q32: i32,
     hold_goal_q16: Option<[i32; 2]>,
     hold: Option<Hold>,
 }
@@ -226,20 +467,35 @@ impl Default for Servo {
 }
 
 impl Servo {
-    /// A servo that has seen nothing yet.
+    /// A servo that has seen nothing yet, running the tuned law ([`params::TUNED`]).
     pub const fn new() -> Self {
+        Self::with_links(&params::TUNED)
+    }
+
+    /// A servo running the law with the constants `links` (for example
+    /// [`params::THESIS`], the thesis's own parameters).
+    pub const fn with_links(links: &'static [LinkConst; 2]) -> Self {
         Self {
             started: false,
             last_enc: [0; 2],
             counts: [0; 2],
             last_timer: 0,
-            obs: [Observer {
-                theta_q16: 0,
-                omega_q16: 0,
+            links,
+            obs: [Observer::at(0); 2],
+            est: [
+                InertiaEstimate::new(&links[0]),
+                InertiaEstimate::new(&links[1]),
+            ],
+            notch: [Notch {
+                x1: 0,
+                x2: 0,
+                y1: 0,
+                y2: 0,
             }; 2],
             torque_q16: [0; 2],
             last_cycle: None,
             since_cycle_q32: 0,
+            since_start_q32: 0,
             hold_goal_q16: None,
             hold: None,
         }
@@ -248,6 +504,11 @@ impl Servo {
     /// The observers' state.
     pub fn observers(&self) -> [Observer; 2] {
         self.obs
+    }
+
+    /// The inertia estimates' state.
+    pub fn estimates(&self) -> [InertiaEstimate; 2] {
+        self.est
     }
 
     /// One pass of the servo loop.
@@ -263,29 +524,29 @@ impl Servo {
                 self.counts[i] = input.enc[i] as i16 as i32;
             }
             self.last_enc[i] = input.enc[i];
-            theta[i] = mul_shr(self.counts[i], LINKS[i].rad_per_count_q32, 16);
+            theta[i] = mul_shr(self.counts[i], self.links[i].rad_per_count_q32, 16);
         }
         let ticks = input.timer.wrapping_sub(self.last_timer);
         self.last_timer = input.timer;
         let dt_q32 = mul_shr(ticks as i32, TIMER_TICK_Q40, 8);
         let first = !self.started;
+        // The observers start at rest: until they have locked onto a link that was already
+        // moving, the velocity they report is not the torque's doing.
+        let settled = self.observers_settled(first, dt_q32);
         if first {
             self.started = true;
             for (o, &t) in self.obs.iter_mut().zip(&theta) {
-                *o = Observer {
-                    theta_q16: t,
-                    omega_q16: 0,
-                };
+                *o = Observer::at(t);
             }
         } else {
             for i in 0..2 {
-                self.obs[i].update(&LINKS[i], theta[i], self.torque_q16[i], dt_q32);
+                self.obs[i].update(&self.links[i], theta[i], self.torque_q16[i], dt_q32);
             }
         }
         let omega = [self.obs[0].omega_q16, self.obs[1].omega_q16];
         let arrest = [
-            arrest_point(&LINKS[0], theta[0], omega[0]),
-            arrest_point(&LINKS[1], theta[1], omega[1]),
+            arrest_point(self.est[0].brake_q32, theta[0], omega[0]),
+            arrest_point(self.est[1].brake_q32, theta[1], omega[1]),
         ];
 
         // The goal: the subgoal while it is fresh and plausible, else hold at the arrest point.
@@ -305,19 +566,63 @@ impl Servo {
             regime: [Regime::Linear; 2],
         };
         for i in 0..2 {
-            let (u, r) = if first {
-                (0, Regime::Linear)
-            } else {
-                law(&LINKS[i], theta[i] - goal[i], omega[i])
-            };
-            let code = dac_code(&LINKS[i], u);
-            // The torque the amplifier will actually produce, for the observer's next update.
-            self.torque_q16[i] = code as i32 * LINKS[i].nm_per_dac_q16;
+            let (code, applied, r) =
+                self.control_link(i, first, settled, theta[i] - goal[i], omega[i], dt_q32);
             out.dac[i] = code;
-            out.torque_q16[i] = self.torque_q16[i];
+            out.torque_q16[i] = applied;
             out.regime[i] = r;
         }
         out
+    }
+
+    /// The law, near-goal corrections, notch and DAC scaling for link `i` with position
+    /// error `err_q16` and velocity `omega_q16`; returns the DAC code, the torque it makes
+    /// and the regime. Nothing is commanded on the `first` pass (no time base yet).
+    /// (A function of its own: inlined into `step`, the branch on `first` compiled to a
+    /// condition-code clobber on the 68k; docs/toolchain.md.)
+    #[inline(never)]
+    fn control_link(
+        &mut self,
+        i: usize,
+        first: bool,
+        settled: bool,
+        err_q16: i32,
+        omega_q16: i32,
+        dt_q32: i32,
+    ) -> (i16, i32, Regime) {
+        let k = &self.links[i];
+        if first {
+            self.est[i].observe(k, false, 0, omega_q16, dt_q32);
+            self.torque_q16[i] = 0;
+            return (0, 0, Regime::Linear);
+        }
+        let (u, r) = if k.proximate {
+            proximate_law(k, self.est[i].two_a_q16, err_q16, omega_q16)
+        } else {
+            law(k, self.est[i].brake_q32, err_q16, omega_q16)
+        };
+        let u = self.notch[i].filter(k, near_goal(k, u, err_q16, omega_q16));
+        let code = dac_code(k, u);
+        // The torque the amplifier will actually produce, for the observer's next update.
+        let applied = code as i32 * k.nm_per_dac_q16;
+        // Full torque the way the link turns (the code at the DAC's end of range).
+        let full = settled && pushes_at_full_torque(code, omega_q16);
+        self.est[i].observe(k, full, self.torque_q16[i], omega_q16, dt_q32);
+        self.torque_q16[i] = applied;
+        (code, applied, r)
+    }
+
+    /// Accounts for the time since start-up; true once the observers count as locked.
+    #[inline(never)]
+    fn observers_settled(&mut self, first: bool, dt_q32: i32) -> bool {
+        if first {
+            return false;
+        }
+        if self.since_start_q32 >= OBSERVER_SETTLE_Q32 {
+            return true;
+        }
+        self.since_start_q32 += dt_q32.min(MAX_DT_Q32);
+        false
     }
 
     #[inline(never)]

@@ -1,11 +1,14 @@
 //! Unit tests of the servo logic, stepping it alone.
 
 use super::*;
-use params::{LINK1_LAW, LINK2_LAW, TIMER_TICK_Q40};
+use params::{LINK1_THESIS as LINK1_LAW, LINK2_THESIS as LINK2_LAW, LINKS, THESIS, TIMER_TICK_Q40};
 use proptest::prelude::*;
 
-const K1: &LinkConst = &LINKS[0];
-const K2: &LinkConst = &LINKS[1];
+/// The thesis's constants: the regime tests check law III.36 against the thesis's numbers.
+const T1: &LinkConst = &THESIS[0];
+/// The board's constants.
+const K1: &LinkConst = &params::TUNED[0];
+const K2: &LinkConst = &params::TUNED[1];
 
 fn q16(x: f64) -> i32 {
     (x * 65536.0).round() as i32
@@ -28,10 +31,10 @@ fn link_2_is_derived_like_link_1() {
         "{f1} Hz zeta {z1}"
     );
     assert!(
-        (f2 - f1).abs() < 1e-9 && (z2 - 1.0).abs() < 1e-9,
+        (f2 - f1).abs() < 1e-9 && (z2 - z1).abs() < 1e-9,
         "{f2} Hz zeta {z2}"
     );
-    assert!((LINK2_LAW.omega_sat_rad_s - 6.02).abs() < 0.01);
+    assert!((LINK2_LAW.omega_sat_rad_s - 6.04).abs() < 0.01);
     assert!((LINK2_LAW.s_sat_rad - 0.772).abs() < 0.001);
 }
 
@@ -51,19 +54,19 @@ fn observer_gains_map_the_continuous_poles() {
 #[test]
 fn each_regime_of_the_law() {
     // Far from the goal at rest: full torque toward it.
-    let (u, r) = law(K1, q16(-3.0), 0);
+    let (u, r) = law(T1, T1.brake_q32, q16(-3.0), 0);
     assert_eq!(r, Regime::Saturated);
-    assert_eq!(u, K1.umax_q16);
+    assert_eq!(u, T1.umax_q16);
     // On the switching curve while braking: err = -w^2 I/(2u^) makes s~ = 0; the velocity
     // term alone (saturated at 1) gives u^ of braking torque: sliding, not saturated.
     let w = 20.0;
     let err = -w * w * arm::LINK1.inertia_kgm2 / (2.0 * LINK1_LAW.uhat_nm);
-    let (u, r) = law(K1, q16(err), q16(w));
+    let (u, r) = law(T1, T1.brake_q32, q16(err), q16(w));
     assert_eq!(r, Regime::Sliding);
     let u_nm = u as f64 / 65536.0;
     assert!((u_nm + LINK1_LAW.uhat_nm).abs() < 0.01, "{u_nm}");
     // Near the goal: PD with K = 182.6 N m/rad, b = 5.83 N m s.
-    let (u, r) = law(K1, q16(0.001), q16(0.0));
+    let (u, r) = law(T1, T1.brake_q32, q16(0.001), q16(0.0));
     assert_eq!(r, Regime::Linear);
     let k = LINK1_LAW.uhat_nm * LINK1_LAW.eps / LINK1_LAW.s_sat_rad;
     assert!(
@@ -71,7 +74,7 @@ fn each_regime_of_the_law() {
         "{}",
         u as f64 / 65536.0
     );
-    let (u, _) = law(K1, 0, q16(0.1));
+    let (u, _) = law(T1, T1.brake_q32, 0, q16(0.1));
     let b = LINK1_LAW.uhat_nm / LINK1_LAW.omega_sat_rad_s;
     assert!(
         ((u as f64 / 65536.0) + b * 0.1 + k * 0.1 * 0.1 * arm::LINK1.inertia_kgm2 / 21.0).abs()
@@ -80,15 +83,133 @@ fn each_regime_of_the_law() {
 }
 
 #[test]
-fn the_arrest_point_is_where_full_braking_stops() {
+fn the_arrest_point_is_where_the_switching_curve_stops() {
+    // The thesis's form with u = umax: theta + w|w| I / (2 umax).
     let w = 10.0;
-    let a = arrest_point(K1, q16(1.0), q16(w)) as f64 / 65536.0;
-    let want = 1.0 + w * w / (2.0 * 13.0 / arm::LINK1.inertia_kgm2);
-    assert!((a - want).abs() < 1e-4, "{a} vs {want}");
-    let a = arrest_point(K2, q16(0.0), q16(-w)) as f64 / 65536.0;
-    assert!(
-        (a + w * w / (2.0 * arm::LINK2.torque_limit_nm / arm::LINK2.inertia_kgm2)).abs() < 1e-4
+    let umax_brake = fx::host_div_shl(
+        (arm::LINK1.inertia_kgm2 * 65536.0) as i32,
+        (2.0 * 13.0 * 65536.0) as i32,
+        32,
     );
+    let a = arrest_point(umax_brake, q16(1.0), q16(w)) as f64 / 65536.0;
+    let want = 1.0 + w * w / (2.0 * 13.0 / arm::LINK1.inertia_kgm2);
+    assert!((a - want).abs() < 1e-3, "{a} vs {want}");
+    // The board's: braking at u^ with the prior inertia (1.25 x nominal until measured),
+    // always further out.
+    let a = arrest_point(K2.brake_q32, q16(0.0), q16(-w)) as f64 / 65536.0;
+    let uhat = params::LINK2_TUNED.uhat_nm;
+    let i = params::PRIOR_INERTIA_SCALE * arm::LINK2.inertia_kgm2;
+    assert!((a + w * w * i / (2.0 * uhat)).abs() < 1e-3, "{a}");
+    assert!(a < -w * w / (2.0 * arm::LINK2.torque_limit_nm / arm::LINK2.inertia_kgm2));
+}
+
+#[test]
+fn each_regime_of_the_proximate_law() {
+    let k = K1;
+    let two_a = k.two_a_q16;
+    let a = two_a as f64 / 65536.0 / 2.0; // rad/s^2
+    let b = k.b_q16 as f64 / 65536.0;
+    let slope = k.slope_q16 as f64 / 65536.0;
+    let yl = 2.0 * a * (k.yl_per_two_a_q32 as f64 / 4294967296.0);
+    let c = 2.0 * a * (k.c_per_two_a_q32 as f64 / 4294967296.0);
+    // Far from the goal at rest: full torque toward it.
+    let (u, r) = proximate_law(k, two_a, q16(-3.0), 0);
+    assert_eq!((u, r), (k.umax_q16, Regime::Saturated));
+    // Braking down the curve: u^ / b faster than the curve's speed gives u^ of braking.
+    let e = -0.5;
+    let uhat = k.uhat_q16 as f64 / 65536.0;
+    let w = (2.0 * a * 0.5f64).sqrt() - c + uhat / b;
+    let (u, r) = proximate_law(k, two_a, q16(e), q16(w));
+    assert_eq!(r, Regime::Sliding);
+    assert!(
+        (u as f64 / 65536.0 + uhat).abs() < 0.02,
+        "{}",
+        u as f64 / 65536.0
+    );
+    // Near the goal: PD with K = b slope.
+    let (u, r) = proximate_law(k, two_a, q16(0.001), q16(0.01));
+    assert_eq!(r, Regime::Linear);
+    let (eq, wq) = (q16(0.001) as f64 / 65536.0, q16(0.01) as f64 / 65536.0);
+    let want = -b * slope * eq - b * wq;
+    assert!(
+        (u as f64 / 65536.0 - want).abs() < 0.01,
+        "{} vs {want}",
+        u as f64 / 65536.0
+    );
+    // The curve joins the line continuously at y_l: the command just inside and just
+    // outside differs by no more than the step in position would make it.
+    let (ui, _) = proximate_law(k, two_a, q16(-yl * 0.999), 0);
+    let (uo, _) = proximate_law(k, two_a, q16(-yl * 1.001), 0);
+    assert!((ui - uo).abs() < q16(0.05), "{ui} {uo}");
+}
+
+#[test]
+fn near_the_goal_friction_is_compensated_and_rest_is_quiet() {
+    let k = K1;
+    let fc = k.friction_comp_q16;
+    // Moving: friction torque in the direction of motion is added.
+    assert_eq!(near_goal(k, q16(1.0), q16(-0.1), q16(2.0)), q16(1.0) + fc);
+    assert_eq!(near_goal(k, q16(1.0), q16(-0.1), q16(-2.0)), q16(1.0) - fc);
+    // At rest outside the dead band: the law's direction, at full friction for 0.1 N m.
+    assert_eq!(near_goal(k, q16(-0.5), q16(0.01), 0), q16(-0.5) - fc);
+    // At rest within the dead band: damping only (zero at zero speed).
+    assert_eq!(near_goal(k, q16(0.3), k.deadband_q16 / 2, 0), 0);
+    // Never beyond umax.
+    assert_eq!(near_goal(k, k.umax_q16, q16(-1.0), q16(5.0)), k.umax_q16);
+    // The thesis's constants have none of it.
+    assert_eq!(near_goal(T1, q16(0.3), 0, 0), q16(0.3));
+}
+
+#[test]
+fn the_notch_removes_the_resonance_and_passes_steady_torque() {
+    let run = |hz: f64| {
+        let mut n = Notch::default();
+        let mut peak = 0i32;
+        for i in 0..3000 {
+            let x = q16((std::f64::consts::TAU * hz * i as f64 / 3000.0).sin());
+            let y = n.filter(K1, x);
+            if i > 1500 {
+                peak = peak.max(y.abs());
+            }
+        }
+        peak as f64 / 65536.0
+    };
+    assert!(run(arm::LINK1.resonance_hz) < 0.05, "{}", run(212.0));
+    assert!((run(5.0) - 1.0).abs() < 0.02, "{}", run(5.0));
+    let mut n = Notch::default();
+    let mut y = 0;
+    for _ in 0..300 {
+        y = n.filter(K1, q16(2.0));
+    }
+    assert!((y - q16(2.0)).abs() <= 2, "{y}");
+}
+
+#[test]
+fn the_inertia_estimate_measures_a_heavier_link() {
+    // A pure inertia 1.2 x nominal under full torque, sampled at 3 kHz.
+    let k = K1;
+    let i_true = 1.2 * arm::LINK1.inertia_kgm2;
+    let dt_q32 = fx::mul_shr(667, TIMER_TICK_Q40, 8);
+    let dt = 667.0 / 2e6;
+    let u = k.umax_q16;
+    let mut est = InertiaEstimate::new(k);
+    let mut w = 0.0;
+    for _ in 0..200 {
+        est.observe(k, true, u, q16(w), dt_q32);
+        w += (u as f64 / 65536.0) / i_true * dt;
+    }
+    let got = est.inertia_q32 as f64 / 4294967296.0;
+    assert!((got / i_true - 1.0).abs() < 0.01, "{got} vs {i_true}");
+    let two_a = est.two_a_q16 as f64 / 65536.0;
+    let want = 2.0 * (k.uhat_q16 as f64 / 65536.0) / i_true;
+    assert!((two_a / want - 1.0).abs() < 0.01, "{two_a} vs {want}");
+    // An implausible reading (a link blocked: no speed gained) is refused.
+    let mut est = InertiaEstimate::new(k);
+    for _ in 0..2000 {
+        est.observe(k, true, u, q16(0.001), dt_q32);
+    }
+    assert_eq!(est.inertia_q32, 0);
+    assert_eq!(est.two_a_q16, k.two_a_q16);
 }
 
 #[test]
@@ -150,7 +271,7 @@ fn the_first_pass_only_initialises() {
     assert!(!o.enable);
     assert_eq!(o.dac, [0, 0]);
     assert_eq!(
-        s.observers()[0].theta_q16,
+        s.observers()[0].theta_q16(),
         fx::mul_shr(1000, K1.rad_per_count_q32, 16)
     );
 }
@@ -252,7 +373,12 @@ proptest! {
     #[test]
     fn the_command_never_exceeds_umax(err in -100.0f64..100.0, w in -700.0f64..700.0, link in 0usize..2) {
         let k = &LINKS[link];
-        let (u, _) = law(k, q16(err), q16(w));
+        let t = &THESIS[link];
+        let (u, _) = law(t, t.brake_q32, q16(err), q16(w));
+        prop_assert!(u.abs() <= t.umax_q16);
+        let (u, _) = proximate_law(k, k.two_a_q16, q16(err), q16(w));
+        prop_assert!(u.abs() <= k.umax_q16);
+        let u = near_goal(k, u, q16(err), q16(w));
         prop_assert!(u.abs() <= k.umax_q16);
         let code = dac_code(k, u);
         let nm = code as i32 * k.nm_per_dac_q16;
