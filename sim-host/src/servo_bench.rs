@@ -378,6 +378,9 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
+/// One picture of the bench: file, title, axis label and the quantity plotted.
+type Figure = (&'static str, &'static str, &'static str, fn(&Point) -> f64);
+
 /// Runs the whole servo benchmark: the 3 rad step of link 1 for the board's law, the
 /// thesis's law and the PD baselines; the targets; the sweep of step sizes and inertia
 /// errors for both links; and the pictures (like figs. III.3-III.6, baselines overlaid)
@@ -615,7 +618,7 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
     let traces: Vec<&[Point]> = results[..4].iter().map(|r| r.trace.as_slice()).collect();
     let s_tilde =
         |p: &Point| (p.theta_rad - 3.0) + p.omega_rad_s * p.omega_rad_s.abs() * i1 / (2.0 * 10.5);
-    let figs: [(&str, &str, &str, fn(&Point) -> f64); 3] = [
+    let figs: [Figure; 3] = [
         (
             "servo_angle.png",
             "fig. III.3: angle vs time, 3 rad step of link 1",

@@ -365,8 +365,8 @@ impl Observer {
             u_q16.clamp(-f, f)
         };
         let net = u_q16.saturating_sub(friction);
-        let dtheta = self.omega_q16 + mul_shr(k.k1_q16, e, 24); // Q16 rad/s
-        let accel = mul_shr(net, k.inv_inertia_q16, 16) + mul_shr(k.k2_q8, e, 16); // Q16 rad/s^2
+        let dtheta = self.omega_q16.saturating_add(mul_shr(k.k1_q16, e, 24)); // Q16 rad/s
+        let accel = mul_shr(net, k.inv_inertia_q16, 16).saturating_add(mul_shr(k.k2_q8, e, 16)); // Q16 rad/s^2
         self.theta_q24 = self.theta_q24.saturating_add(mul_shr(dtheta, dt, 24));
         // Physical bound: no link turns faster than its motors' speed limit (x2 margin).
         self.omega_q16 = self
@@ -516,7 +516,7 @@ impl Servo {
         // Extend the 16-bit counters; the first latch is taken as absolute (the counters are
         // zeroed with the arm at angle 0 before power-up).
         let mut theta = [0i32; 2];
-        for i in 0..2 {
+        for (i, t) in theta.iter_mut().enumerate() {
             if self.started {
                 self.counts[i] = self.counts[i]
                     .wrapping_add(input.enc[i].wrapping_sub(self.last_enc[i]) as i16 as i32);
@@ -524,7 +524,7 @@ impl Servo {
                 self.counts[i] = input.enc[i] as i16 as i32;
             }
             self.last_enc[i] = input.enc[i];
-            theta[i] = mul_shr(self.counts[i], self.links[i].rad_per_count_q32, 16);
+            *t = mul_shr(self.counts[i], self.links[i].rad_per_count_q32, 16);
         }
         let ticks = input.timer.wrapping_sub(self.last_timer);
         self.last_timer = input.timer;
@@ -539,8 +539,8 @@ impl Servo {
                 *o = Observer::at(t);
             }
         } else {
-            for i in 0..2 {
-                self.obs[i].update(&self.links[i], theta[i], self.torque_q16[i], dt_q32);
+            for (i, &t) in theta.iter().enumerate() {
+                self.obs[i].update(&self.links[i], t, self.torque_q16[i], dt_q32);
             }
         }
         let omega = [self.obs[0].omega_q16, self.obs[1].omega_q16];
