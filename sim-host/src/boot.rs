@@ -101,6 +101,20 @@ impl System {
         self.run_cycles((ms * CPU_HZ as f64 / 1000.0) as u64);
     }
 
+    /// Steps board `i` alone, one instruction at a time, until its first heartbeat (within
+    /// one second of emulated time); returns its cycle count then, `None` if it never beat.
+    pub fn run_to_first_heartbeat(&mut self, i: usize) -> Option<u64> {
+        let off = BoardSlot::of(self.boards[i].id).heartbeat();
+        let b = &mut self.boards[i];
+        while b.cycles < CPU_HZ && b.state == RunState::Running {
+            b.step(&mut self.global);
+            if ArrayBus::new(&mut self.global).read_u32(off) != 0 {
+                return Some(b.cycles);
+            }
+        }
+        None
+    }
+
     /// The board's heartbeat.
     pub fn heartbeat(&mut self, id: BoardId) -> u32 {
         self.bus().read_u32(BoardSlot::of(id).heartbeat())
@@ -170,21 +184,9 @@ pub struct BootReport {
 /// first heartbeat, then runs the whole system for `run_ms` and reports.
 pub fn boot(dir: &Path, boards: &[BoardId], run_ms: f64) -> Result<Vec<BootReport>, ImageError> {
     let mut sys = System::power_up(dir, boards)?;
-    let limit = CPU_HZ; // one second of emulated time
-    let mut first = Vec::new();
-    for i in 0..sys.boards.len() {
-        let id = sys.boards[i].id;
-        let off = BoardSlot::of(id).heartbeat();
-        let mut got = None;
-        while sys.boards[i].cycles < limit && sys.boards[i].state == RunState::Running {
-            sys.boards[i].step(&mut sys.global);
-            if ArrayBus::new(&mut sys.global).read_u32(off) != 0 {
-                got = Some(sys.boards[i].cycles);
-                break;
-            }
-        }
-        first.push(got);
-    }
+    let first: Vec<Option<u64>> = (0..sys.boards.len())
+        .map(|i| sys.run_to_first_heartbeat(i))
+        .collect();
     // Bring every board to the same clock, then run together.
     let start = sys.boards.iter().map(|b| b.cycles).max().unwrap_or(0);
     sys.run_cycles(start);
@@ -230,27 +232,20 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
         .collect();
     syms.sort();
     let mut sys = System::power_up(dir, &[board])?;
-    let off = BoardSlot::of(board).heartbeat();
+    sys.run_to_first_heartbeat(0);
+    let hb0 = sys.heartbeat(board);
     let b = &mut sys.boards[0];
-    while b.cycles < CPU_HZ && b.state == RunState::Running {
-        b.step(&mut sys.global);
-        if ArrayBus::new(&mut sys.global).read_u32(off) != 0 {
-            break;
-        }
-    }
-    let hb0 = ArrayBus::new(&mut sys.global).read_u32(off);
-    let end = b.cycles + (ms * CPU_HZ as f64 / 1000.0) as u64;
-    let mut per: std::collections::HashMap<usize, u64> = std::collections::HashMap::new();
     let start = b.cycles;
+    let end = start + (ms * CPU_HZ as f64 / 1000.0) as u64;
+    let mut per: std::collections::HashMap<usize, u64> = std::collections::HashMap::new();
     while b.cycles < end && b.state == RunState::Running {
         let pc = b.cpu.pc;
         let c = b.step(&mut sys.global);
         let i = syms.partition_point(|(a, _)| *a <= pc);
         *per.entry(i).or_default() += c;
     }
-    let loops = ArrayBus::new(&mut sys.global)
-        .read_u32(off)
-        .wrapping_sub(hb0) as u64;
+    let cycles = b.cycles - start;
+    let loops = sys.heartbeat(board).wrapping_sub(hb0) as u64;
     let mut functions: Vec<(String, u64)> = per
         .into_iter()
         .map(|(i, c)| {
@@ -264,7 +259,7 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
         .collect();
     functions.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     Ok(Profile {
-        cycles: b.cycles - start,
+        cycles,
         loops,
         functions,
     })

@@ -9,6 +9,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use vme_map::BoardId;
 
+/// The board names the command line accepts (`parse_board`).
+const BOARD_NAMES: &str = "sensing, cspace, servo, reflex, planner, cspace0..2";
+
 /// The host simulator of the five-board 68020 robot controller.
 #[derive(Parser)]
 #[command(version, about)]
@@ -161,7 +164,7 @@ fn main() -> ExitCode {
             top,
         } => {
             let Some(id) = parse_board(&board) else {
-                eprintln!("sim-host: unknown board {board:?} (sensing, cspace, servo, reflex, planner, cspace0..2)");
+                eprintln!("sim-host: unknown board {board:?} ({BOARD_NAMES})");
                 return ExitCode::from(2);
             };
             let dir = images.unwrap_or_else(default_images_dir);
@@ -199,7 +202,7 @@ fn main() -> ExitCode {
                 match parse_board(&board) {
                     Some(b) => vec![b],
                     None => {
-                        eprintln!("sim-host: unknown board {board:?} (sensing, cspace, servo, reflex, planner, cspace0..2, all)");
+                        eprintln!("sim-host: unknown board {board:?} ({BOARD_NAMES}, all)");
                         return ExitCode::from(2);
                     }
                 }

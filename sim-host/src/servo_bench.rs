@@ -144,15 +144,6 @@ pub fn run(ctrl: Controller, s: Step) -> Response {
         Controller::ImageRate => &servo::params::TUNED_AT_IMAGE_HZ,
         _ => &TUNED,
     };
-    run_inner(ctrl, links, s)
-}
-
-/// Runs one step experiment of law III.36 with the constants `links`.
-pub fn run_with(links: &'static [LinkConst; 2], s: Step) -> Response {
-    run_inner(Controller::SlidingMode(true), links, s)
-}
-
-fn run_inner(ctrl: Controller, links: &'static [LinkConst; 2], s: Step) -> Response {
     let mut plant = Plant::new([0.0, 0.0], DEFAULT_DT_S);
     for (l, p) in plant.links.iter_mut().zip([arm::LINK1, arm::LINK2]) {
         l.model = LinkModel {
@@ -378,8 +369,15 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
-/// One picture of the bench: file, title, axis label and the quantity plotted.
-type Figure = (&'static str, &'static str, &'static str, fn(&Point) -> f64);
+/// One picture of the bench: file, title, axis label, the quantity plotted and its fixed
+/// vertical range (`None`: fit the data).
+type Figure = (
+    &'static str,
+    &'static str,
+    &'static str,
+    fn(&Point) -> f64,
+    Option<std::ops::Range<f64>>,
+);
 
 /// Runs the whole servo benchmark: the 3 rad step of link 1 for the board's law, the
 /// thesis's law and the PD baselines; the targets; the sweep of step sizes and inertia
@@ -422,6 +420,8 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
             (c.name(), c, Step::new(0, 3.0, 1.0, dur))
         })
         .collect();
+    // The runs of `COMPARED` come first, in its order; this one follows.
+    let pd_free_run = runs.len();
     runs.push((
         format!("{} (no friction)", BEST_LINEAR_PD.name()),
         BEST_LINEAR_PD,
@@ -451,6 +451,8 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
             },
         ));
     }
+    // Where the inertia-error runs sit in `runs` (the targets read them).
+    let inertia_runs = runs.len();
     for scale in [0.8, 1.2] {
         runs.push((
             format!("{} inertia x{scale}", Controller::SlidingMode(true).name()),
@@ -497,7 +499,7 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
         tuned.rest_torque_rms_nm,
         verdict(tuned.chatter_hz == 0.0)
     );
-    for (k, scale) in [(8, 0.8), (9, 1.2)] {
+    for (k, scale) in [(inertia_runs, 0.8), (inertia_runs + 1, 1.2)] {
         let r = &results[k];
         let ideal = bang_bang_s(3.0, i1 * scale, 13.0, 10.5);
         let ratio = r.settle_s.unwrap_or(f64::INFINITY) / ideal;
@@ -510,8 +512,11 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
             verdict(r.overshoot_rad <= 2e-3 && ratio <= 1.15)
         );
     }
-    let pd = &results[3];
-    let pd_free = &results[4];
+    let pd = &results[COMPARED
+        .iter()
+        .position(|&c| c == BEST_LINEAR_PD)
+        .expect("compared")];
+    let pd_free = &results[pd_free_run];
     match pd.settle_s {
         Some(tp) => {
             let _ = writeln!(
@@ -616,71 +621,72 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let names: Vec<String> = COMPARED.iter().map(|c| c.name()).collect();
     let traces: Vec<&[Point]> = results[..4].iter().map(|r| r.trace.as_slice()).collect();
-    let s_tilde =
-        |p: &Point| (p.theta_rad - 3.0) + p.omega_rad_s * p.omega_rad_s.abs() * i1 / (2.0 * 10.5);
-    let figs: [Figure; 3] = [
+    let figs: [Figure; 4] = [
         (
             "servo_angle.png",
             "fig. III.3: angle vs time, 3 rad step of link 1",
             "angle (rad)",
             |p| p.theta_rad,
+            None,
         ),
         (
             "servo_velocity.png",
             "fig. III.4: velocity vs time",
             "velocity (rad/s)",
             |p| p.omega_rad_s,
+            None,
         ),
         (
             "servo_torque.png",
             "fig. III.5: torque vs time",
             "torque (N m)",
             |p| p.torque_nm,
+            None,
+        ),
+        (
+            "servo_s.png",
+            "fig. III.6: s~ (u^ = 10.5 N m, nominal I) vs time",
+            "s~ (rad)",
+            |p| {
+                (p.theta_rad - 3.0)
+                    + p.omega_rad_s * p.omega_rad_s.abs() * arm::LINK1.inertia_kgm2 / (2.0 * 10.5)
+            },
+            Some(-0.5..0.5),
         ),
     ];
-    let window = |tr: &[Point], f: &dyn Fn(&Point) -> f64, t0: f64, t1: f64| -> Vec<(f64, f64)> {
-        tr.iter()
-            .filter(|p| p.t_s >= t0 && p.t_s <= t1)
-            .map(|p| (p.t_s, f(p)))
-            .collect()
-    };
+    // The first `n` controllers' traces between `t0` and `t1`, one series each.
+    let series =
+        |n: usize, f: fn(&Point) -> f64, t0: f64, t1: f64| -> Vec<(String, Vec<(f64, f64)>)> {
+            names
+                .iter()
+                .zip(&traces)
+                .take(n)
+                .map(|(name, tr)| {
+                    let pts = tr
+                        .iter()
+                        .filter(|p| p.t_s >= t0 && p.t_s <= t1)
+                        .map(|p| (p.t_s, f(p)))
+                        .collect();
+                    (name.clone(), pts)
+                })
+                .collect()
+        };
     let mut written = Vec::new();
-    for (file, title, label, f) in figs {
-        let series: Vec<(String, Vec<(f64, f64)>)> = names
-            .iter()
-            .zip(&traces)
-            .map(|(n, tr)| (n.clone(), window(tr, &f, 0.0, 0.5)))
-            .collect();
-        crate::plots::overlay(&out.join(file), title, label, &series, None)?;
+    for (file, title, label, f, y) in figs {
+        crate::plots::overlay(
+            &out.join(file),
+            title,
+            label,
+            &series(names.len(), f, 0.0, 0.5),
+            y,
+        )?;
         written.push(file);
     }
-    let series: Vec<(String, Vec<(f64, f64)>)> = names
-        .iter()
-        .zip(&traces)
-        .map(|(n, tr)| (n.clone(), window(tr, &s_tilde, 0.0, 0.5)))
-        .collect();
-    crate::plots::overlay(
-        &out.join("servo_s.png"),
-        "fig. III.6: s~ (u^ = 10.5 N m, nominal I) vs time",
-        "s~ (rad)",
-        &series,
-        Some(-0.5..0.5),
-    )?;
-    written.push("servo_s.png");
     let count_mrad = arm::LINK1.rad_per_count() * 1e3;
-    let mut series: Vec<(String, Vec<(f64, f64)>)> = names
-        .iter()
-        .zip(&traces)
-        .take(2)
-        .map(|(n, tr)| {
-            (
-                n.clone(),
-                window(tr, &|p: &Point| (p.theta_rad - 3.0) * 1e3, 0.15, 0.4),
-            )
-        })
-        .collect();
+    // The board's law and the thesis's, the error in mrad near the goal.
+    let mut arrival = series(2, |p| (p.theta_rad - 3.0) * 1e3, 0.15, 0.4);
     for sign in [1.0, -1.0] {
-        series.push((
+        arrival.push((
             format!("{}2 counts", if sign > 0.0 { "+" } else { "-" }),
             vec![
                 (0.15, sign * 2.0 * count_mrad),
@@ -692,7 +698,7 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
         &out.join("servo_arrival.png"),
         "arrival at the goal: angle error, 3 rad step of link 1",
         "error (mrad)",
-        &series,
+        &arrival,
         Some(-6.0..6.0),
     )?;
     written.push("servo_arrival.png");

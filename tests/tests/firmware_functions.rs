@@ -5,16 +5,29 @@ use sim_host::image::Image;
 use system_tests::images_dir;
 use vme_map::{BoardId, GLOBAL_RAM_SIZE};
 
-fn board() -> (EmuBoard, Image, Vec<u8>) {
-    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+fn board_of(id: BoardId) -> (EmuBoard, Image, Vec<u8>) {
+    let img =
+        Image::load(&images_dir().join(format!("{}.elf", sim_host::boot::image_name(id)))).unwrap();
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let b = EmuBoard::new(
-        BoardId::Reflex,
-        &img,
-        sim_host::devices::standalone(BoardId::Reflex),
-        &mut global,
-    );
+    let b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
     (b, img, global)
+}
+
+fn board() -> (EmuBoard, Image, Vec<u8>) {
+    board_of(BoardId::Reflex)
+}
+
+/// The servo image's routine `name` (C ABI, 32-bit arguments and result), called on the
+/// emulated CPU.
+fn servo_routine(name: &str) -> impl FnMut(&[i32]) -> i32 {
+    let (mut b, img, mut g) = board_of(BoardId::Servo);
+    let f = img
+        .symbol(name)
+        .unwrap_or_else(|| panic!("{name} not in the servo image"));
+    move |args| {
+        let args: Vec<u32> = args.iter().map(|&a| a as u32).collect();
+        b.call(&mut g, f, &args, 10_000).unwrap().0 as i32
+    }
 }
 
 /// Scratch area in the board's RAM for test buffers.
@@ -114,17 +127,7 @@ fn cas_swaps_only_when_the_word_matches() {
 
 #[test]
 fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
-    let img = Image::load(&images_dir().join("servo.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let mut b = EmuBoard::new(
-        BoardId::Servo,
-        &img,
-        sim_host::devices::standalone(BoardId::Servo),
-        &mut global,
-    );
-    let f = img
-        .symbol("__fx_mul_shr")
-        .expect("__fx_mul_shr in the servo image");
+    let mut f = servo_routine("__fx_mul_shr");
     let mut rng = sim_host::sim::Rng::new(42);
     let edge = [
         0,
@@ -156,25 +159,14 @@ fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
         cases.push((a, bb, sh));
     }
     for (a, bb, sh) in cases {
-        let (got, _) = b
-            .call(&mut global, f, &[a as u32, bb as u32, sh], 10_000)
-            .unwrap();
         let want = servo::fx::host_mul_shr(a, bb, sh);
-        assert_eq!(got as i32, want, "mul_shr({a}, {bb}, {sh})");
+        assert_eq!(f(&[a, bb, sh as i32]), want, "mul_shr({a}, {bb}, {sh})");
     }
 }
 
 #[test]
 fn the_fixed_point_divide_matches_the_host_bit_for_bit() {
-    let img = Image::load(&images_dir().join("servo.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let mut b = EmuBoard::new(
-        BoardId::Servo,
-        &img,
-        sim_host::devices::standalone(BoardId::Servo),
-        &mut global,
-    );
-    let f = img.symbol("__fx_div").expect("__fx_div in the servo image");
+    let mut f = servo_routine("__fx_div");
     let mut rng = sim_host::sim::Rng::new(7);
     let edge = [
         0,
@@ -204,27 +196,14 @@ fn the_fixed_point_divide_matches_the_host_bit_for_bit() {
         cases.push((n, d, sh));
     }
     for (n, d, sh) in cases {
-        let (got, _) = b
-            .call(&mut global, f, &[n as u32, d as u32, sh], 10_000)
-            .unwrap();
         let want = servo::fx::host_div_shl(n, d, sh);
-        assert_eq!(got as i32, want, "div_shl({n}, {d}, {sh})");
+        assert_eq!(f(&[n, d, sh as i32]), want, "div_shl({n}, {d}, {sh})");
     }
 }
 
 #[test]
 fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
-    let img = Image::load(&images_dir().join("servo.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let mut b = EmuBoard::new(
-        BoardId::Servo,
-        &img,
-        sim_host::devices::standalone(BoardId::Servo),
-        &mut global,
-    );
-    let f = img
-        .symbol("__fx_sqrt_q16")
-        .expect("__fx_sqrt_q16 in the servo image");
+    let mut f = servo_routine("__fx_sqrt_q16");
     let mut rng = sim_host::sim::Rng::new(11);
     let mut cases = vec![
         0,
@@ -244,7 +223,6 @@ fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
         cases.push(rng.next_u64() as i32 >> (rng.next_u64() % 32));
     }
     for x in cases {
-        let (got, _) = b.call(&mut global, f, &[x as u32], 10_000).unwrap();
-        assert_eq!(got as i32, servo::fx::host_sqrt_q16(x), "sqrt_q16({x})");
+        assert_eq!(f(&[x]), servo::fx::host_sqrt_q16(x), "sqrt_q16({x})");
     }
 }

@@ -138,6 +138,18 @@ pub fn arrest_point(brake_q32: i32, theta_q16: i32, omega_q16: i32) -> i32 {
     theta_q16.saturating_add(signed_square(omega_q16, brake_q32))
 }
 
+/// Which way a link turns for friction's purposes: 1 or -1 above [`LinkConst::moving_q16`],
+/// 0 below it (at rest).
+fn turning(k: &LinkConst, omega_q16: i32) -> i32 {
+    if omega_q16 > k.moving_q16 {
+        1
+    } else if omega_q16 < -k.moving_q16 {
+        -1
+    } else {
+        0
+    }
+}
+
 /// Near-goal corrections (beyond the thesis), applied to the law's torque `u_q16`:
 ///
 /// * at rest within the dead band of the goal ([`params::DEADBAND_COUNTS`]), only the law's
@@ -155,17 +167,14 @@ pub fn near_goal(k: &LinkConst, u_q16: i32, err_q16: i32, omega_q16: i32) -> i32
     if k.deadband_q16 == 0 {
         return u_q16;
     }
-    let moving = omega_q16.saturating_abs() > k.moving_q16;
-    if !moving && err_q16.saturating_abs() <= k.deadband_q16 {
-        return -mul_shr(k.b_q16, omega_q16, 16);
-    }
-    let dir_q16 = if omega_q16 > k.moving_q16 {
-        ONE_Q16
-    } else if omega_q16 < -k.moving_q16 {
-        -ONE_Q16
-    } else {
+    let dir_q16 = match turning(k, omega_q16) {
+        0 if err_q16.saturating_abs() <= k.deadband_q16 => {
+            return -mul_shr(k.b_q16, omega_q16, 16);
+        }
         // u / 0.1 N m, clamped to +-1.
-        mul_shr(u_q16, 10 * ONE_Q16, 16).clamp(-ONE_Q16, ONE_Q16)
+        0 => mul_shr(u_q16, 10 * ONE_Q16, 16).clamp(-ONE_Q16, ONE_Q16),
+        d if d > 0 => ONE_Q16,
+        _ => -ONE_Q16,
     };
     u_q16
         .saturating_add(mul_shr(k.friction_comp_q16, dir_q16, 16))
@@ -279,7 +288,7 @@ impl InertiaEstimate {
 /// (Branches, not `signum`: the product form compiled to a condition-code clobber on the
 /// 68k in `Servo::step`; docs/toolchain.md.)
 #[inline(never)]
-pub fn pushes_at_full_torque(code: i16, omega_q16: i32) -> bool {
+fn pushes_at_full_torque(code: i16, omega_q16: i32) -> bool {
     if omega_q16 > 0 {
         code >= params::DAC_MAX
     } else if omega_q16 < 0 {
@@ -357,12 +366,10 @@ impl Observer {
         // law pushes makes the observer see a velocity that is not there, which cancels
         // part of the law's position term and leaves the link stuck counts from the goal.
         let f = k.friction_comp_q16;
-        let friction = if self.omega_q16 > k.moving_q16 {
-            f
-        } else if self.omega_q16 < -k.moving_q16 {
-            -f
-        } else {
-            u_q16.clamp(-f, f)
+        let friction = match turning(k, self.omega_q16) {
+            0 => u_q16.clamp(-f, f),
+            d if d > 0 => f,
+            _ => -f,
         };
         let net = u_q16.saturating_sub(friction);
         let dtheta = self.omega_q16.saturating_add(mul_shr(k.k1_q16, e, 24)); // Q16 rad/s
@@ -411,6 +418,8 @@ pub enum Hold {
 
 /// A subgoal older than this is stale: the reflex runs at 1 kHz or more.
 pub const STALE_S: f64 = 0.02;
+/// [`STALE_S`] in Q32 seconds, fixed at compile time (no floating point in the image).
+const STALE_Q32: i32 = consts::round(STALE_S * consts::Q32) as i32;
 /// Largest plausible absolute angle (the encoders' unwrap range is +-4 revolutions).
 pub const ANGLE_LIMIT_URAD: i32 = 25_000_000;
 
@@ -504,11 +513,6 @@ impl Servo {
     /// The observers' state.
     pub fn observers(&self) -> [Observer; 2] {
         self.obs
-    }
-
-    /// The inertia estimates' state.
-    pub fn estimates(&self) -> [InertiaEstimate; 2] {
-        self.est
     }
 
     /// One pass of the servo loop.
@@ -633,7 +637,6 @@ impl Servo {
         arrest: [i32; 2],
         first: bool,
     ) -> ([i32; 2], Option<Hold>) {
-        let stale_q32 = consts::round(STALE_S * consts::Q32) as i32;
         let verdict = match sub {
             None if self.last_cycle.is_none() => Err(Hold::NoSubgoal),
             None => Err(Hold::Torn),
@@ -649,7 +652,7 @@ impl Servo {
                     .any(|g| g.unsigned_abs() > ANGLE_LIMIT_URAD as u32)
                 {
                     Err(Hold::OutOfRange)
-                } else if self.since_cycle_q32 > stale_q32 {
+                } else if self.since_cycle_q32 > STALE_Q32 {
                     Err(Hold::Stale)
                 } else {
                     Ok([urad_to_q16(s.goal_urad[0]), urad_to_q16(s.goal_urad[1])])
