@@ -16,6 +16,8 @@
 
 pub mod bench;
 pub mod boot;
+pub mod cspace_db;
+pub mod cspace_oracle;
 pub mod devices;
 pub mod docs;
 pub mod emu;

@@ -66,6 +66,31 @@ enum Cmd {
         #[arg(long, default_value_t = 15)]
         top: usize,
     },
+    /// Build the C-space image database from the arm's outline and check it against the
+    /// committed `crates/cspace/src/tables.rs` (or rewrite that file with `--write`).
+    CspaceDb {
+        /// Rewrite the committed tables instead of checking them.
+        #[arg(long)]
+        write: bool,
+    },
+    /// Check the C-space map against the exact oracle for random disks (centres over the
+    /// arm's reach, radii up to 2 inches): false-free pixels (must be none), false-occupied
+    /// area, undecided pixels.
+    CspaceCheck {
+        /// Number of random disks.
+        #[arg(long, default_value_t = 100_000)]
+        disks: u64,
+        /// Seed of the disks.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Draw the thesis's C-space figures (IV.1-IV.6, IV.9-IV.11): exact image and map side by
+    /// side.
+    CspaceFigures {
+        /// Where to write the PNGs.
+        #[arg(long, default_value = "docs/cspace")]
+        out: PathBuf,
+    },
     /// Boot board images on emulated 68020s and print each board's heartbeat and status.
     Boot {
         /// A board name (sensing, cspace, servo, reflex, planner, cspace0..2) or `all`.
@@ -195,6 +220,102 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Cmd::CspaceDb { write } => {
+            let t = std::time::Instant::now();
+            let fams = sim_host::cspace_db::build();
+            for f in &fams {
+                let n = |v: &Vec<cspace::db::ChainTable>| -> usize {
+                    v.iter().map(|t| t.samples.len()).sum()
+                };
+                println!(
+                    "disk {:5.1} mm: {} stripe widths, {} front and {} rear images, {} vertex growths",
+                    f.disk_m * 1e3,
+                    f.stripe.len(),
+                    n(&f.front),
+                    n(&f.rear),
+                    f.grown
+                );
+            }
+            let text = sim_host::cspace_db::render(&fams);
+            let path = sim_host::cspace_db::TABLES_PATH;
+            println!("built in {:.1} s", t.elapsed().as_secs_f64());
+            if write {
+                if let Err(e) = std::fs::write(path, &text) {
+                    eprintln!("error: cannot write {path}: {e}");
+                    return ExitCode::FAILURE;
+                }
+                println!("wrote {path} ({} bytes)", text.len());
+            } else {
+                match std::fs::read_to_string(path) {
+                    Ok(old) if old == text => println!("{path} is up to date"),
+                    Ok(_) => {
+                        eprintln!(
+                            "error: {path} differs from the generator's output; run with --write"
+                        );
+                        return ExitCode::FAILURE;
+                    }
+                    Err(e) => {
+                        eprintln!("error: cannot read {path}: {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
+            ExitCode::SUCCESS
+        }
+        Cmd::CspaceCheck { disks, seed } => {
+            let t = std::time::Instant::now();
+            let bar = indicatif::ProgressBar::new(disks);
+            let s = sim_host::cspace_oracle::survey(seed, disks, &|k| bar.set_position(k));
+            bar.finish_and_clear();
+            let c = s.total;
+            println!(
+                "C-space map against the exact oracle: {} random disks (seed {seed}), {:.0} s",
+                s.disks,
+                t.elapsed().as_secs_f64()
+            );
+            println!("  pixels holding a collision (exact area): {}", c.exact);
+            println!(
+                "  false free (must be 0):                  {} in {} disks",
+                c.false_free, s.disks_with_false_free
+            );
+            println!(
+                "  false occupied:                          {} = {:.1}% of the exact area",
+                c.false_occupied,
+                100.0 * c.false_occupied as f64 / c.exact.max(1) as f64
+            );
+            println!(
+                "  undecided at 1/64 pixel:                 {} = {:.2}% of the exact area",
+                c.unknown,
+                100.0 * c.unknown as f64 / c.exact.max(1) as f64
+            );
+            if let (r, Some(d)) = s.worst_ratio {
+                println!(
+                    "  worst single disk (image >= 100 px): {:.0}% false occupied, {d:?}",
+                    100.0 * r
+                );
+            }
+            if let Some(d) = s.first_false_free {
+                eprintln!("error: false-free pixels, first for {d:?}");
+                return ExitCode::FAILURE;
+            }
+            ExitCode::SUCCESS
+        }
+        Cmd::CspaceFigures { out } => match sim_host::cspace_oracle::figures(&out) {
+            Ok(v) => {
+                println!("{:<34} {:>12} {:>16}", "figure", "exact px", "margin px");
+                for (f, e, m) in v {
+                    println!(
+                        "{f:<34} {e:>12} {m:>10} ({:>3.0}%)",
+                        100.0 * m as f64 / e.max(1) as f64
+                    );
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Cmd::Boot { board, images, ms } => {
             let boards: Vec<BoardId> = if board == "all" {
                 FIVE.to_vec()

@@ -264,3 +264,109 @@ pub fn task(path: &Path, title: &str, cfg: &Config, s: &[Sample]) -> Result<(), 
     legend(&mut c)?;
     root.present().map_err(err)
 }
+
+/// What one pixel of a C-space picture shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapCell {
+    /// Free in the map and in the exact image.
+    Free,
+    /// Marked in the map and holding a collision.
+    Exact,
+    /// Marked in the map, proven free (the map's conservative margin).
+    FalseOccupied,
+    /// Free in the map but holding a collision (must never appear).
+    FalseFree,
+}
+
+/// Writes a C-space picture of 128 x 128 pixels (`cells[i2 * 128 + i1]`), theta1 across and
+/// theta2 up, both from -pi to pi as in the thesis's figures IV.1-IV.14: on the left the
+/// exact image (pixels that hold a colliding configuration), on the right the map with its
+/// conservative margin.
+pub fn cspace_map(path: &Path, title: &str, cells: &[MapCell]) -> Result<(), String> {
+    font()?;
+    let root = BitMapBackend::new(path, (1240, 680)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let root = root.titled(title, ("sans-serif", 20)).map_err(err)?;
+    let (left, right) = root.split_horizontally(620);
+    let exact = |m: MapCell| match m {
+        MapCell::Exact | MapCell::FalseFree => Some(RGBColor(40, 40, 40)),
+        _ => None,
+    };
+    let map = |m: MapCell| match m {
+        MapCell::Free => None,
+        MapCell::Exact => Some(RGBColor(40, 40, 40)),
+        MapCell::FalseOccupied => Some(RGBColor(150, 180, 230)),
+        MapCell::FalseFree => Some(RGBColor(230, 20, 20)),
+    };
+    panel(
+        &left,
+        "exact image",
+        cells,
+        &exact,
+        &[("collides", RGBColor(40, 40, 40))],
+    )?;
+    panel(
+        &right,
+        "map",
+        cells,
+        &map,
+        &[
+            ("marked, collides", RGBColor(40, 40, 40)),
+            ("marked, free (margin)", RGBColor(150, 180, 230)),
+            ("false free", RGBColor(230, 20, 20)),
+        ],
+    )?;
+    root.present().map_err(err)
+}
+
+type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+fn panel(
+    area: &Area<'_>,
+    caption: &str,
+    cells: &[MapCell],
+    colour: &dyn Fn(MapCell) -> Option<RGBColor>,
+    keys: &[(&str, RGBColor)],
+) -> Result<(), String> {
+    use std::f64::consts::{PI, TAU};
+    let px = TAU / 128.0;
+    let mut c = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 16))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-PI..PI, -PI..PI)
+        .map_err(err)?;
+    c.configure_mesh()
+        .disable_mesh()
+        .x_desc("theta1 (rad)")
+        .y_desc("theta2 (rad)")
+        .draw()
+        .map_err(err)?;
+    // Pixel i covers [i px, (i + 1) px); shown in -pi..pi.
+    let wrap = |i: usize| {
+        let a = i as f64 * px;
+        if a >= PI {
+            a - TAU
+        } else {
+            a
+        }
+    };
+    let mut rects = Vec::new();
+    for i2 in 0..128usize {
+        for i1 in 0..128usize {
+            if let Some(col) = colour(cells[i2 * 128 + i1]) {
+                let (x, y) = (wrap(i1), wrap(i2));
+                rects.push(Rectangle::new([(x, y), (x + px, y + px)], col.filled()));
+            }
+        }
+    }
+    c.draw_series(rects).map_err(err)?;
+    for &(label, col) in keys {
+        c.draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], col.filled()));
+    }
+    legend(&mut c)
+}

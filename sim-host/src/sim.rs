@@ -258,7 +258,7 @@ impl Native {
     fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
         match self {
             Native::Sensing(b) => b.poll(g, io),
-            Native::Cspace(b) => b.poll(g, io),
+            Native::Cspace(b) => b.poll(&mut &mut *g, io),
             Native::Servo(b) => b.poll(g, io),
             Native::Reflex(b) => b.poll(g, io),
             Native::Planner(b) => b.poll(g, io),

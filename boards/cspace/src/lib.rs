@@ -1,18 +1,25 @@
-//! The cspace board: the I/O shell that wires its private registers and global RAM to its
-//! logic (thesis ch. IV (configuration-space transforms); design.md section 3). The logic's `step` arrives with issue 7;
-//! until then the board boots, checks the global RAM header and publishes its heartbeat and
-//! status. The same code runs in the image (`src/main.rs`, volatile MMIO) and in the
-//! simulator's native mode (device models behind [`IoBus`]).
+//! The cspace board: wires global RAM to the C-space transforms of `crates/cspace` (thesis
+//! ch. IV). Each main-loop pass reads the sensing board's object table, takes the next job
+//! of the shared work list (several C-space boards share the jobs, thesis line 1225), and if
+//! that obstacle moved draws its new image into the map and erases the old one. The same code
+//! runs in the image (`src/main.rs`, volatile MMIO) and in the simulator's native mode.
+//!
+//! Fail-safe: a torn object table is skipped (no image changes: the old ones stay, which is
+//! the safe side); a saturated or underflowed map counter and an obstacle the database cannot
+//! transform are recorded as faults (state `Degraded`), and the images in place stay.
 #![no_std]
 #![deny(missing_docs)]
 
 use board_shell::Shell;
+use cspace::worklist::{self, Outcome};
 use regs::IoBus;
-use vme_map::{BoardId, BoardState, GlobalBus};
+use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
 /// The cspace board's state between main-loop passes.
 pub struct Board {
     shell: Shell,
+    last: Outcome,
+    fault: Option<FaultCode>,
 }
 
 impl Board {
@@ -25,6 +32,18 @@ impl Board {
     pub const fn new(id: BoardId) -> Self {
         Self {
             shell: Shell::new(id),
+            last: Outcome {
+                entry: 0,
+                busy: false,
+                redrawn: false,
+                clamped: false,
+                flags: cspace::Flags {
+                    saturated: false,
+                    underflow: false,
+                },
+                error: None,
+            },
+            fault: None,
         }
     }
 
@@ -33,16 +52,52 @@ impl Board {
         self.shell.id()
     }
 
+    /// What the last pass did.
+    pub fn last(&self) -> Outcome {
+        self.last
+    }
+
     /// Puts the outputs in their safe state and waits for the global RAM header.
     pub fn boot(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
         safe(io);
         self.shell.boot(g, || {});
     }
 
-    /// One pass of the main loop. Returns the new heartbeat.
-    pub fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) -> u32 {
+    /// One pass of the main loop: one work-list job. Returns the new heartbeat. Generic over
+    /// the bus so the image's map accesses are inlined volatile words.
+    pub fn poll<G: GlobalBus>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
-        self.shell.end(g, BoardState::Running)
+        let me = 1 + (self.id().index() - BoardId::Cspace0.index());
+        let (fault, at) = match vme_map::OBJECTS.read(g) {
+            Ok((objects, _)) => {
+                let out = worklist::step(g, me, &objects);
+                self.last = out;
+                let at = vme_map::layout::work_entry(out.entry);
+                if out.flags.saturated || out.flags.underflow {
+                    (Some(FaultCode::MapCounter), at)
+                } else if out.error.is_some() {
+                    (Some(FaultCode::Untransformable), at)
+                } else if out.clamped {
+                    (Some(FaultCode::OutOfRange), at)
+                } else {
+                    (None, at)
+                }
+            }
+            Err(_) => (Some(FaultCode::TornRecord), vme_map::OBJECTS.offset()),
+        };
+        // A fault is recorded when it starts (or changes), not on every pass it lasts.
+        if fault.is_some() && fault != self.fault {
+            if let Some(code) = fault {
+                self.shell.life().degraded(g, code, at);
+            }
+        }
+        self.fault = fault;
+        let state = if fault.is_some() {
+            BoardState::Degraded
+        } else {
+            BoardState::Running
+        };
+        self.shell.end(g, state)
     }
 }
 

@@ -104,6 +104,76 @@ pub const OUTLINE: [(Body, Part); 6] = [
     ),
 ];
 
+impl Part {
+    /// Distance from the point (`along_m`, `across_m`), given in the part's link frame, to
+    /// the part (0 inside it).
+    pub fn distance_m(&self, along_m: f64, across_m: f64) -> f64 {
+        match *self {
+            Part::Disk { s_m, r_m } => (libm::hypot(along_m - s_m, across_m) - r_m).max(0.0),
+            Part::Rect {
+                s0_m,
+                s1_m,
+                half_width_m,
+            } => {
+                let ds = if along_m < s0_m {
+                    s0_m - along_m
+                } else if along_m > s1_m {
+                    along_m - s1_m
+                } else {
+                    0.0
+                };
+                let dt = (libm::fabs(across_m) - half_width_m).max(0.0);
+                libm::hypot(ds, dt)
+            }
+        }
+    }
+
+    /// Where the part starts along its link (its smallest `s`).
+    pub fn s_min_m(&self) -> f64 {
+        match *self {
+            Part::Disk { s_m, r_m } => s_m - r_m,
+            Part::Rect { s0_m, .. } => s0_m,
+        }
+    }
+}
+
+/// The C-space obstacle type a part of the outline makes (thesis ch. IV section 3, fig. IV.7).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageType {
+    /// The shoulder hub: a disk touching it collides in every configuration (region I).
+    Ground,
+    /// Link 1: a stripe of theta1, whatever theta2 (regions I-III).
+    Link1,
+    /// Link 2 in front of the elbow, tip included (regions I-V).
+    Link2Front,
+    /// Link 2's tail behind the elbow with the counterweight (regions III-IV).
+    Link2Rear,
+}
+
+impl ImageType {
+    /// The type of `part` of `body`: link 2's parts split at the elbow.
+    pub fn of(body: Body, part: &Part) -> Self {
+        match body {
+            Body::Ground => ImageType::Ground,
+            Body::Link1 => ImageType::Link1,
+            Body::Link2 if part.s_min_m() >= 0.0 => ImageType::Link2Front,
+            Body::Link2 => ImageType::Link2Rear,
+        }
+    }
+}
+
+/// Distance from a point at (`along_m`, `across_m`) in the frame of the body that parts of
+/// type `ty` belong to, to the nearest of those parts (infinite if there are none).
+pub fn type_distance_m(ty: ImageType, along_m: f64, across_m: f64) -> f64 {
+    let mut best = f64::INFINITY;
+    for (body, part) in OUTLINE {
+        if ImageType::of(body, &part) == ty {
+            best = best.min(part.distance_m(along_m, across_m));
+        }
+    }
+    best
+}
+
 /// A disk obstacle in the plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disk {
@@ -142,26 +212,7 @@ impl Frame {
     /// Distance from `(px, py)` to `part` in this frame (0 inside).
     fn distance(&self, part: Part, px: f64, py: f64) -> f64 {
         let (dx, dy) = (px - self.ox, py - self.oy);
-        let along = dx * self.c + dy * self.s;
-        let across = -dx * self.s + dy * self.c;
-        match part {
-            Part::Disk { s_m, r_m } => (libm::hypot(along - s_m, across) - r_m).max(0.0),
-            Part::Rect {
-                s0_m,
-                s1_m,
-                half_width_m,
-            } => {
-                let ds = if along < s0_m {
-                    s0_m - along
-                } else if along > s1_m {
-                    along - s1_m
-                } else {
-                    0.0
-                };
-                let dt = (libm::fabs(across) - half_width_m).max(0.0);
-                libm::hypot(ds, dt)
-            }
-        }
+        part.distance_m(dx * self.c + dy * self.s, -dx * self.s + dy * self.c)
     }
 }
 

@@ -138,6 +138,11 @@ pub enum FaultCode {
     AdcSaturated = 10,
     /// The global RAM header did not carry the expected magic and layout version.
     LayoutMismatch = 11,
+    /// A C-space map counter saturated (it stays set) or an erase found one at zero.
+    MapCounter = 12,
+    /// An obstacle could not be transformed into C-space (larger than the image database
+    /// holds): its old image stays.
+    Untransformable = 13,
 }
 
 impl FaultCode {
@@ -157,6 +162,8 @@ impl FaultCode {
             9 => OutOfRange,
             10 => AdcSaturated,
             11 => LayoutMismatch,
+            12 => MapCounter,
+            13 => Untransformable,
             _ => return Option::None,
         })
     }

@@ -23,6 +23,26 @@ pub trait GlobalBus {
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32;
 }
 
+/// A borrowed bus is a bus: lets code generic over a sized `G: GlobalBus` (inlined accesses
+/// on the 68020) also run on a `&mut dyn GlobalBus` (the simulator's native mode).
+impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
+    fn read_u32(&mut self, off: u32) -> u32 {
+        (**self).read_u32(off)
+    }
+    fn write_u32(&mut self, off: u32, val: u32) {
+        (**self).write_u32(off, val)
+    }
+    fn read_u8(&mut self, off: u32) -> u8 {
+        (**self).read_u8(off)
+    }
+    fn write_u8(&mut self, off: u32, val: u8) {
+        (**self).write_u8(off, val)
+    }
+    fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
+        (**self).cas_u32(off, current, new)
+    }
+}
+
 /// Global RAM backed by a byte slice, for unit tests and the host simulator.
 ///
 /// The slice may be shorter than 8 MiB; accesses beyond it panic.

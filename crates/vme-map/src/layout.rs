@@ -16,7 +16,7 @@ use crate::GLOBAL_RAM_SIZE;
 /// Value of the header's magic word: ASCII "NW87" (Newman 1987).
 pub const MAGIC: u32 = 0x4E57_3837;
 /// Version of this layout; bumped by every incompatible change.
-pub const LAYOUT_VERSION: u32 = 1;
+pub const LAYOUT_VERSION: u32 = 2;
 
 /// Header: magic word (written by the host at power-up).
 pub const HEADER_MAGIC: u32 = 0x0000;
@@ -135,7 +135,8 @@ pub const PLANNER_GOAL: SeqLock<PlannerGoal> = SeqLock::at(0x0600);
 /// Host commands (writer: host).
 pub const HOST_COMMAND: SeqLock<HostCommand> = SeqLock::at(0x0640);
 
-/// C-space work list: generation word (writer: sensing, which queues jobs).
+/// C-space work list: the cursor (thesis line 1225's semaphore), the next entry to transform;
+/// changed only with `CAS.L` by the C-space boards (`crates/cspace`, module `worklist`).
 pub const WORK_GENERATION: u32 = 0x0800;
 /// C-space work list: first entry (claim words: CAS by C-space boards).
 pub const WORK_LIST: u32 = 0x0810;
@@ -147,7 +148,9 @@ pub const fn work_entry(i: u32) -> u32 {
     WORK_LIST + i * WORK_ENTRY_BYTES
 }
 
-/// C-space map: 128 x 128 pixels of 4 edge-direction counter bytes (writers: C-space boards).
+/// C-space map: 128 x 128 pixels of 4 edge-direction counter bytes (writers: C-space boards):
+/// a big-endian word per pixel, bytes +theta1, -theta1, +theta2, -theta2 outward normal
+/// (`crates/cspace`, module `counters`).
 pub const CSPACE_MAP: u32 = 0x0001_0000;
 /// Pixels per C-space axis (thesis ch. IV: ~0.05 rad per pixel).
 pub const CSPACE_SIDE: u32 = 128;
@@ -160,6 +163,14 @@ pub const CSPACE_MAP_BYTES: u32 = CSPACE_SIDE * CSPACE_SIDE * CSPACE_COUNTERS;
 pub const fn cspace_counter(i1: u32, i2: u32, dir: u32) -> u32 {
     CSPACE_MAP + ((i2 % CSPACE_SIDE) * CSPACE_SIDE + (i1 % CSPACE_SIDE)) * CSPACE_COUNTERS + dir
 }
+
+/// C-space stripe layer: 128 counter words, one per theta1 column, in the map's word format
+/// (writers: C-space boards). Link-1 images do not depend on theta2 (thesis ch. IV section 3),
+/// so they are kept once per column: pixel (i1, i2) is occupied when its map word or stripe
+/// word `i1` is not zero.
+pub const CSPACE_STRIPES: u32 = 0x0000_0C00;
+/// Bytes of the stripe layer.
+pub const CSPACE_STRIPES_BYTES: u32 = CSPACE_SIDE * CSPACE_COUNTERS;
 
 /// First log ring.
 pub const LOG_RINGS: u32 = 0x0002_0000;
@@ -219,7 +230,7 @@ const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Re
 }
 
 /// Every region of global RAM in address order.
-pub const LAYOUT: [Region; 10] = [
+pub const LAYOUT: [Region; 11] = [
     Region {
         name: "header",
         offset: HEADER_MAGIC,
@@ -251,6 +262,13 @@ pub const LAYOUT: [Region; 10] = [
         name: "work_list",
         offset: WORK_GENERATION,
         size: WORK_LIST - WORK_GENERATION + WORK_ENTRIES as u32 * WORK_ENTRY_BYTES,
+        writer: Writer::CspaceBoards,
+        seqlock: false,
+    },
+    Region {
+        name: "cspace_stripes",
+        offset: CSPACE_STRIPES,
+        size: CSPACE_STRIPES_BYTES,
         writer: Writer::CspaceBoards,
         seqlock: false,
     },

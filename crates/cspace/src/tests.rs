@@ -1,0 +1,195 @@
+use super::*;
+use proptest::prelude::*;
+
+struct Host {
+    map: Vec<u32>,
+    stripes: Vec<u32>,
+}
+
+impl Host {
+    fn new() -> Self {
+        Self {
+            map: vec![0; 128 * 128],
+            stripes: vec![0; 128],
+        }
+    }
+    fn canvas(&mut self) -> SliceCanvas<'_> {
+        SliceCanvas {
+            map: &mut self.map,
+            stripes: &mut self.stripes,
+        }
+    }
+    fn occupied(&self, i1: usize, i2: usize) -> bool {
+        self.map[i2 * 128 + i1] != 0 || self.stripes[i1] != 0
+    }
+    fn clear(&self) -> bool {
+        self.map.iter().chain(&self.stripes).all(|&w| w == 0)
+    }
+}
+
+fn disk(x_mm: f64, y_mm: f64, r_mm: f64) -> Disk {
+    Disk {
+        x_um: (x_mm * 1e3) as i32,
+        y_um: (y_mm * 1e3) as i32,
+        r_um: (r_mm * 1e3) as i32,
+    }
+}
+
+#[test]
+fn the_database_covers_every_disk_up_to_two_inches() {
+    assert!(!FAMILIES.is_empty());
+    for w in FAMILIES.windows(2) {
+        assert!(
+            w[0].disk_r_um < w[1].disk_r_um,
+            "families by increasing radius"
+        );
+    }
+    assert!(family(25_400).is_ok(), "the thesis's 2-inch obstacles");
+    assert_eq!(family(1_000_000), Err(Error::TooLarge));
+    assert_eq!(family(-1), Err(Error::BadRadius));
+}
+
+#[test]
+fn regions_of_fig_iv_7() {
+    let kinds = |x_mm: f64| {
+        let im = images(&disk(x_mm, 0.0, 0.0)).unwrap();
+        (
+            im.stripe.map(|s| s.full),
+            im.front.is_some(),
+            im.rear.is_some(),
+        )
+    };
+    // Region I: everything; II: link 1 and front; III: all three; IV: front and rear;
+    // V: front only; VI: nothing.
+    assert_eq!(kinds(30.0), (Some(true), false, false));
+    assert_eq!(kinds(100.0), (Some(false), true, false));
+    assert_eq!(kinds(200.0), (Some(false), true, true));
+    assert_eq!(kinds(330.0), (None, true, true));
+    assert_eq!(kinds(450.0), (None, true, false));
+    assert_eq!(kinds(530.0), (None, false, false));
+}
+
+#[test]
+fn images_are_odd_symmetric_and_shift_with_the_polar_angle() {
+    let a = images(&disk(350.0, 0.0, 25.4)).unwrap().front.unwrap();
+    for k in 0..CHAIN {
+        assert_eq!(a.theta1_u[k], -a.theta1_u[CHAIN - 1 - k]);
+        assert_eq!(a.upper_u[k], -a.lower_u[CHAIN - 1 - k]);
+    }
+    // 45 degrees: the same image moved 4096 units along the diagonal (fig. IV.9), to within
+    // the polar conversion's rounding.
+    let c = 350.0 / 2f64.sqrt();
+    let b = images(&disk(c, c, 25.4)).unwrap().front.unwrap();
+    for k in 0..CHAIN {
+        assert!((b.theta1_u[k] - a.theta1_u[k] - 4096).abs() <= 2);
+        assert!((b.upper_u[k] - a.upper_u[k] - 4096).abs() <= 2);
+    }
+}
+
+#[test]
+fn an_image_across_the_seam_of_the_torus_is_drawn_on_both_sides() {
+    // A disk behind the shoulder (polar angle pi): its images straddle theta1 = +-pi.
+    let mut h = Host::new();
+    let im = images(&disk(-400.0, 0.0, 25.4)).unwrap();
+    apply(&im, &mut h.canvas(), Op::Draw);
+    let col = |i1: usize| (0..128).any(|i2| h.occupied(i1, i2));
+    assert!(col(63) && col(64), "both sides of theta1 = pi");
+    assert!(!col(0), "nothing at theta1 = 0");
+    apply(&im, &mut h.canvas(), Op::Erase);
+    assert!(h.clear());
+}
+
+#[test]
+fn region_i_fills_the_stripe_layer_only() {
+    let mut h = Host::new();
+    let im = images(&disk(10.0, 5.0, 10.0)).unwrap();
+    apply(&im, &mut h.canvas(), Op::Draw);
+    assert!(h.stripes.iter().all(|&w| w == counters::ALL));
+    assert!(
+        h.map.iter().all(|&w| w == 0),
+        "16384 pixels cost 128 stripe words"
+    );
+}
+
+#[test]
+fn edge_normals_point_out_of_the_image() {
+    // The front image of a disk on the x axis: its top rows count +theta2, its bottom rows
+    // -theta2, its inside all four.
+    let mut h = Host::new();
+    let im = images(&disk(450.0, 0.0, 25.4)).unwrap();
+    raster::shape(im.front.as_ref().unwrap(), &mut h.canvas(), Op::Draw);
+    let (mut top, mut bottom, mut inside) = (0, 0, 0);
+    for i1 in 0..128 {
+        let col: Vec<(usize, u32)> = (0..128)
+            .map(|i2| (i2, h.map[i2 * 128 + i1]))
+            .filter(|&(_, w)| w != 0)
+            .collect();
+        if col.len() < 3 || col.len() > 60 {
+            continue;
+        }
+        // Unwrap around theta2 = 0 for the ordering.
+        let key = |i2: usize| if i2 >= 64 { i2 as i32 - 128 } else { i2 as i32 };
+        let hi = col.iter().max_by_key(|c| key(c.0)).unwrap().1;
+        let lo = col.iter().min_by_key(|c| key(c.0)).unwrap().1;
+        top += (hi & counters::P2 != 0) as u32;
+        bottom += (lo & counters::M2 != 0) as u32;
+        inside += col.iter().filter(|c| c.1 == counters::ALL).count();
+    }
+    assert!(
+        top > 5 && bottom > 5 && inside > 5,
+        "{top} {bottom} {inside}"
+    );
+}
+
+#[test]
+fn counters_saturate_and_report_instead_of_wrapping() {
+    let mut h = Host::new();
+    let im = images(&disk(450.0, 0.0, 25.4)).unwrap();
+    let mut flags = Flags::default();
+    for _ in 0..300 {
+        flags.merge(apply(&im, &mut h.canvas(), Op::Draw));
+    }
+    assert!(flags.saturated);
+    for _ in 0..300 {
+        apply(&im, &mut h.canvas(), Op::Erase);
+    }
+    assert!(
+        !h.clear(),
+        "saturated counters stay set: the pixels stay occupied rather than open a void"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Draw-new-before-erase-old over random moves of several obstacles, then a final erase:
+    /// the map is all zero again (thesis lines ~1199-1210), and at no step is a pixel that
+    /// the current images cover found free.
+    #[test]
+    fn moves_then_erase_leave_the_map_clear(
+        moves in prop::collection::vec((0usize..3, -520_000i32..520_000, -520_000i32..520_000, 0i32..25_400), 1..12)
+    ) {
+        let mut h = Host::new();
+        let mut at: [Option<Images>; 3] = [None; 3];
+        for (k, x, y, r) in moves {
+            let new = images(&Disk { x_um: x, y_um: y, r_um: r }).unwrap();
+            apply(&new, &mut h.canvas(), Op::Draw);
+            // The new image is in place before the old one goes.
+            let mut only = Host::new();
+            apply(&new, &mut only.canvas(), Op::Draw);
+            for i2 in 0..128 {
+                for i1 in 0..128 {
+                    prop_assert!(!only.occupied(i1, i2) || h.occupied(i1, i2));
+                }
+            }
+            if let Some(old) = at[k].replace(new) {
+                let f = apply(&old, &mut h.canvas(), Op::Erase);
+                prop_assert_eq!(f, Flags::default());
+            }
+        }
+        for im in at.iter().flatten() {
+            apply(im, &mut h.canvas(), Op::Erase);
+        }
+        prop_assert!(h.clear());
+    }
+}

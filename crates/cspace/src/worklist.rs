@@ -1,0 +1,239 @@
+//! The shared work list (thesis line ~1225, proposed there and built here): a circular list
+//! of the moving obstacles with the position each one's image was last drawn at, and a
+//! cursor the C-space boards advance with `CAS.L`. A board takes the next entry, claims it
+//! with `CAS.L`, and if the obstacle moved draws its new image and erases the old one, then
+//! records the new position and releases the entry. So N boards share the transforms evenly
+//! whatever moves, and a board that stops only slows the map down.
+//!
+//! Moving obstacles are drawn swept ("blurred", lines ~1236-1242) over [`LOOKAHEAD_MS`]
+//! along their measured velocity: the image covers wherever the obstacle can be until the
+//! next refresh. An obstacle whose beacon turns invalid keeps its last image.
+
+use crate::{apply, images, BusCanvas, Disk, Error, Flags, Op, POLAR_MARGIN_UM};
+use vme_map::layout::{work_entry, WORK_GENERATION};
+use vme_map::record::Record;
+use vme_map::records::{beacon_flags, ObjectTable, WorkEntry};
+use vme_map::GlobalBus;
+
+/// The beacons whose obstacles the C-space boards transform (thesis ch. II.3: five obstacles
+/// and the instructional robot), entry `i` for beacon `OBSTACLE_BEACONS[i]`.
+pub const OBSTACLE_BEACONS: [u32; 6] = [0, 1, 2, 3, 4, 7];
+/// Radius the boards give every obstacle: the thesis's 2-inch cylinders (ch. IV section 5).
+pub const OBSTACLE_R_UM: i32 = 25_400;
+/// How far ahead a moving obstacle's image is swept.
+pub const LOOKAHEAD_MS: i32 = 40;
+/// A move smaller than this (and an unchanged sweep) is not redrawn.
+pub const MOVE_UM: i32 = 500;
+/// Longest sweep drawn, per axis (an obstacle faster than 2.5 m/s is drawn as if at 2.5 m/s
+/// and the board records a fault).
+pub const MAX_SWEEP_MM: i32 = 100;
+/// Most disks a sweep is covered with.
+pub const MAX_COVER: usize = 8;
+
+/// Bit of [`WorkEntry::state`]: an image is drawn at the entry's position.
+pub const DRAWN: u32 = 1;
+/// [`WorkEntry::state`] counts the redraws in its bits 8..32.
+pub const JOB_SHIFT: u32 = 8;
+
+/// The disks that cover an obstacle of radius `r_um` swept from (`x`, `y`) by
+/// (`dx_mm`, `dy_mm`): by IV.1, a disk of radius r + d/2 centred on a piece of the path of
+/// length d covers the obstacle anywhere along that piece. The piece length is chosen so the
+/// covering disks use the database's next family up.
+pub fn cover(
+    x_um: i32,
+    y_um: i32,
+    dx_mm: i32,
+    dy_mm: i32,
+    r_um: i32,
+) -> ([Disk; MAX_COVER], usize) {
+    let mut out = [Disk { x_um, y_um, r_um }; MAX_COVER];
+    let (dx, dy) = (dx_mm * 1000, dy_mm * 1000);
+    // Path length, rounded up (integer square root of the squared length in mm).
+    let len_mm = isqrt((dx_mm * dx_mm + dy_mm * dy_mm) as u32) as i32 + 1;
+    if dx_mm == 0 && dy_mm == 0 {
+        return (out, 1);
+    }
+    // The smallest family whose pieces need at most MAX_COVER disks.
+    let mut n = MAX_COVER as i32;
+    for f in crate::db::FAMILIES {
+        let slack_um = f.disk_r_um - POLAR_MARGIN_UM - r_um;
+        if slack_um > 0 {
+            let k = (len_mm * 1000 + 2 * slack_um - 1) / (2 * slack_um);
+            if k <= MAX_COVER as i32 {
+                n = k.max(1);
+                break;
+            }
+        }
+    }
+    let half_piece_um = (len_mm * 1000 + 2 * n - 1) / (2 * n);
+    for (i, d) in out.iter_mut().take(n as usize).enumerate() {
+        // Centre of piece i: (2i + 1) / (2n) along the path.
+        let num = 2 * i as i32 + 1;
+        *d = Disk {
+            x_um: x_um + dx / (2 * n) * num,
+            y_um: y_um + dy / (2 * n) * num,
+            r_um: r_um + half_piece_um + 1,
+        };
+    }
+    (out, n as usize)
+}
+
+fn isqrt(n: u32) -> u32 {
+    let mut x = n;
+    let mut r = 0u32;
+    let mut bit = 1u32 << 30;
+    while bit > n {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if x >= r + bit {
+            x -= r + bit;
+            r = (r >> 1) + bit;
+        } else {
+            r >>= 1;
+        }
+        bit >>= 2;
+    }
+    r
+}
+
+/// The sweep (mm over [`LOOKAHEAD_MS`]) of an obstacle now at (`x`, `y`) at time `t_us`,
+/// from the velocity since the entry's drawn sample (none if nothing is drawn; the same
+/// sample gives a zero move); clamped to [`MAX_SWEEP_MM`] (then the flag is set). Written
+/// without selects: compiled, they clobbered the condition codes on the 68k
+/// (docs/toolchain.md).
+#[inline(never)]
+fn sweep(e: &WorkEntry, x: i32, y: i32, t_us: u32) -> (i32, i32, bool) {
+    let drawn = (e.state & DRAWN) as i32;
+    // Elapsed time in 64 us units, never zero (one unit of bias, a few per cent at most
+    // at the sensing board's 2 ms frames).
+    let dt64 = (t_us.wrapping_sub(e.generation) >> 6) as i32 + 1;
+    // um over the look-ahead: dx * (LOOKAHEAD_MS * 1000 / 64) / dt64; |dx| < 2^20 um keeps
+    // the product in 32 bits.
+    let k = LOOKAHEAD_MS * 1000 / 64;
+    let sx = (x - e.x_um) * k / dt64 / 1000 * drawn;
+    let sy = (y - e.y_um) * k / dt64 / 1000 * drawn;
+    let (cx, cy) = (clamp_mm(sx), clamp_mm(sy));
+    (cx, cy, ((cx ^ sx) | (cy ^ sy)) != 0)
+}
+
+#[inline(never)]
+fn clamp_mm(v: i32) -> i32 {
+    v.clamp(-MAX_SWEEP_MM, MAX_SWEEP_MM)
+}
+
+fn sweep_of(e: &WorkEntry) -> (i32, i32) {
+    ((e.reserved as i32) >> 16, (e.reserved as i32) << 16 >> 16)
+}
+
+/// Draws (`op`) the images of an entry-like position and sweep.
+fn draw<B: GlobalBus + ?Sized>(
+    g: &mut B,
+    x: i32,
+    y: i32,
+    sweep: (i32, i32),
+    r: i32,
+    op: Op,
+) -> Result<Flags, Error> {
+    let (disks, n) = cover(x, y, sweep.0, sweep.1, r);
+    let mut f = Flags::default();
+    for d in &disks[..n] {
+        let im = images(d)?;
+        f.merge(apply(&im, &mut BusCanvas(&mut *g), op));
+    }
+    Ok(f)
+}
+
+/// What one pass of [`step`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Outcome {
+    /// The entry taken.
+    pub entry: u32,
+    /// Its claim was held by another board: nothing done.
+    pub busy: bool,
+    /// The obstacle was redrawn.
+    pub redrawn: bool,
+    /// Its sweep was longer than [`MAX_SWEEP_MM`] and was clamped.
+    pub clamped: bool,
+    /// Counter events of the draw and erase.
+    pub flags: Flags,
+    /// The obstacle could not be transformed (its old image, if any, stays).
+    pub error: Option<Error>,
+}
+
+fn entry_at(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
+    let base = work_entry(i);
+    WorkEntry::decode(&mut |w| g.read_u32(base + 4 * w))
+}
+
+/// One job of C-space board `me` (1-based: 1 + its C-space index) with the object table
+/// `objects` just read: takes the next entry from the shared cursor and brings its image up
+/// to date.
+pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) -> Outcome {
+    // The semaphore: advance the shared cursor atomically.
+    let n = OBSTACLE_BEACONS.len() as u32;
+    let mut c = g.read_u32(WORK_GENERATION);
+    loop {
+        let found = g.cas_u32(WORK_GENERATION, c, c.wrapping_add(1));
+        if found == c {
+            break;
+        }
+        c = found;
+    }
+    let i = c % n;
+    let mut out = Outcome {
+        entry: i,
+        ..Default::default()
+    };
+    let claim = work_entry(i);
+    if g.cas_u32(claim, 0, me) != 0 {
+        out.busy = true;
+        return out;
+    }
+    let mut e = entry_at(g, i);
+    let b = &objects.beacons[OBSTACLE_BEACONS[i as usize] as usize];
+    if b.flags & beacon_flags::VALID != 0 {
+        let drawn = e.state & DRAWN != 0;
+        let (sx, sy, clamped) = sweep(&e, b.x_um, b.y_um, b.t_us);
+        out.clamped = clamped;
+        let (ox, oy) = sweep_of(&e);
+        let moved = !drawn
+            || (b.x_um - e.x_um).abs() > MOVE_UM
+            || (b.y_um - e.y_um).abs() > MOVE_UM
+            || (sx - ox).abs() > 1
+            || (sy - oy).abs() > 1;
+        if moved {
+            // New image first, then the old one goes: no void ever opens.
+            match draw(g, b.x_um, b.y_um, (sx, sy), OBSTACLE_R_UM, Op::Draw) {
+                Ok(f) => {
+                    out.flags.merge(f);
+                    if drawn {
+                        match draw(g, e.x_um, e.y_um, (ox, oy), e.r_um, Op::Erase) {
+                            Ok(f) => out.flags.merge(f),
+                            Err(err) => out.error = Some(err),
+                        }
+                    }
+                    e.x_um = b.x_um;
+                    e.y_um = b.y_um;
+                    e.r_um = OBSTACLE_R_UM;
+                    e.generation = b.t_us;
+                    e.reserved = ((sx as u32) << 16) | (sy as u32 & 0xFFFF);
+                    e.beacon = OBSTACLE_BEACONS[i as usize];
+                    e.state = (e.state | DRAWN).wrapping_add(1 << JOB_SHIFT);
+                    out.redrawn = true;
+                }
+                Err(err) => out.error = Some(err),
+            }
+        }
+    }
+    // Write the entry back with the claim still ours, then release it last.
+    e.claim = me;
+    let base = work_entry(i);
+    e.encode(&mut |w, v| {
+        if w != 0 {
+            g.write_u32(base + 4 * w, v)
+        }
+    });
+    g.write_u32(claim, 0);
+    out
+}
