@@ -16,6 +16,7 @@
 
 pub mod bench;
 pub mod boot;
+pub mod cspace_bench;
 pub mod cspace_db;
 pub mod cspace_oracle;
 pub mod devices;

@@ -37,9 +37,11 @@ enum Cmd {
         trace_every_us: f64,
     },
     /// Measurements: `sim` = real-time factor of the native simulation (`--seconds`, `--reps`);
-    /// `servo` = step responses against the thesis's baselines, with pictures (`--out`).
+    /// `servo` = step responses against the thesis's baselines, with pictures (`--out`);
+    /// `cspace` = the C-space image's cycles per obstacle update and refresh rates with 1-3
+    /// boards.
     Bench {
-        /// What to measure (sim, servo).
+        /// What to measure (sim, servo, cspace).
         what: String,
         /// Simulated seconds per repetition.
         #[arg(long, default_value_t = 10.0)]
@@ -166,6 +168,18 @@ fn main() -> ExitCode {
                 let r = sim_host::bench::sim(seconds, reps);
                 println!("{r}");
                 ExitCode::SUCCESS
+            }
+            "cspace" => {
+                match sim_host::cspace_bench::report(&sim_host::boot::default_images_dir()) {
+                    Ok(r) => {
+                        print!("{r}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("sim-host: bench cspace: {e} (build the images first: cargo xtask images)");
+                        ExitCode::FAILURE
+                    }
+                }
             }
             "servo" => match sim_host::servo_bench::report(&out) {
                 Ok(r) => {

@@ -4,7 +4,10 @@
 //!    branch that reads them (llvm/llvm-project#152816, #213564), or
 //! 2. made an extend-flag reader (`ADDX`, `SUBX`, `NEGX`, `ROXL`, `ROXR`) consume the borrow
 //!    of a `CMP` or `TST`, which set C but leave X untouched on the 68k: the reader gets a
-//!    stale X from older code.
+//!    stale X from older code, or
+//! 3. emitted a 32-bit `DIVS.L`/`DIVU.L` whose remainder register differs from its quotient
+//!    register: the backend encodes the remainder field as %d0 whatever it allocated
+//!    (llvm/llvm-project#224186), so the divide silently overwrites %d0.
 //!
 //! See docs/toolchain.md.
 //!
@@ -217,6 +220,20 @@ pub fn scan(disassembly: &str) -> Vec<Hit> {
                 }
             }
         }
+        if ["divsll", "divull"].contains(&mn) {
+            let regs: Vec<&str> = ops.split(',').map(str::trim).collect();
+            if regs.len() == 3 && regs[1] != regs[2] {
+                hits.push(Hit {
+                    function: function.clone(),
+                    branch_addr: addr,
+                    branch: rest.to_string(),
+                    clobber: format!(
+                        "remainder written to {} (llvm/llvm-project#224186)",
+                        regs[1]
+                    ),
+                });
+            }
+        }
         if reads_ccr(mn) {
             for (pm, po) in run.iter().rev() {
                 match classify(pm, po) {
@@ -280,6 +297,19 @@ mod tests {
         assert!(scan(call).is_empty());
         let scc = "00000100 <f>:\n 100:\tcmpl %d1,%d0\n 102:\tmoveq #0,%d2\n 104:\tseq %d3\n";
         assert_eq!(scan(scc).len(), 1, "Scc reads the flags too");
+    }
+
+    #[test]
+    fn a_divide_that_clobbers_d0_is_found() {
+        let bad = "000027d2 <f>:\n 27d2:\tdivsll %d0,%d0,%d3\n";
+        let h = scan(bad);
+        assert_eq!(h.len(), 1);
+        assert!(h[0].clobber.contains("%d0"));
+        let ok = "00000100 <f>:\n 100:\tdivsll %d1,%d3,%d3\n 104:\tdivsl %d3,%d1,%d0\n";
+        assert!(
+            scan(ok).is_empty(),
+            "quotient-only and 64-bit forms are fine"
+        );
     }
 
     #[test]

@@ -17,6 +17,9 @@
 //!
 //! Angles are in angle units of 2 pi / 32768 (the thesis's encoder units of ch. IV, 0.011
 //! degree), 256 per pixel. Nothing here touches hardware: the board hands in a [`Canvas`].
+//!
+//! No compiled division: every `/` goes through [`fx::div`] (the M68k backend's DIVS.L
+//! clobbers %d0; docs/toolchain.md), and `cargo xtask images` refuses an image that has one.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
@@ -116,7 +119,7 @@ fn bracket(radii: impl Iterator<Item = i32> + Clone, r_um: i32) -> Option<(usize
         if let Some(r0) = prev {
             if r_um <= r1 {
                 // Spacing below 2^15 um (the generator checks), so the shift stays in i32.
-                return Some((i - 1, ((r_um - r0) << 16) / (r1 - r0)));
+                return Some((i - 1, fx::div_shl(r_um - r0, r1 - r0, 16)));
             }
         } else if r_um < r1 {
             return None;

@@ -127,7 +127,7 @@ fn eval(t1: &[i32], v: &[i32], k: usize, t: i32, up: bool) -> i32 {
             va.min(vb)
         }
     } else {
-        va + (vb - va) * (t - ta) / (tb - ta)
+        va + fx::div((vb - va) * (t - ta), tb - ta)
     };
     if up {
         x + 1

@@ -12,7 +12,7 @@
 use crate::{apply, images, BusCanvas, Disk, Error, Flags, Op, POLAR_MARGIN_UM};
 use vme_map::layout::{work_entry, WORK_GENERATION};
 use vme_map::record::Record;
-use vme_map::records::{beacon_flags, ObjectTable, WorkEntry};
+use vme_map::records::{beacon_flags, Beacon, ObjectTable, WorkEntry};
 use vme_map::GlobalBus;
 
 /// The beacons whose obstacles the C-space boards transform (thesis ch. II.3: five obstacles
@@ -58,20 +58,20 @@ pub fn cover(
     for f in crate::db::FAMILIES {
         let slack_um = f.disk_r_um - POLAR_MARGIN_UM - r_um;
         if slack_um > 0 {
-            let k = (len_mm * 1000 + 2 * slack_um - 1) / (2 * slack_um);
+            let k = fx::div(len_mm * 1000 + 2 * slack_um - 1, 2 * slack_um);
             if k <= MAX_COVER as i32 {
                 n = k.max(1);
                 break;
             }
         }
     }
-    let half_piece_um = (len_mm * 1000 + 2 * n - 1) / (2 * n);
+    let half_piece_um = fx::div(len_mm * 1000 + 2 * n - 1, 2 * n);
     for (i, d) in out.iter_mut().take(n as usize).enumerate() {
         // Centre of piece i: (2i + 1) / (2n) along the path.
         let num = 2 * i as i32 + 1;
         *d = Disk {
-            x_um: x_um + dx / (2 * n) * num,
-            y_um: y_um + dy / (2 * n) * num,
+            x_um: x_um + fx::div(dx, 2 * n) * num,
+            y_um: y_um + fx::div(dy, 2 * n) * num,
             r_um: r_um + half_piece_um + 1,
         };
     }
@@ -111,8 +111,8 @@ fn sweep(e: &WorkEntry, x: i32, y: i32, t_us: u32) -> (i32, i32, bool) {
     // um over the look-ahead: dx * (LOOKAHEAD_MS * 1000 / 64) / dt64; |dx| < 2^20 um keeps
     // the product in 32 bits.
     let k = LOOKAHEAD_MS * 1000 / 64;
-    let sx = (x - e.x_um) * k / dt64 / 1000 * drawn;
-    let sy = (y - e.y_um) * k / dt64 / 1000 * drawn;
+    let sx = fx::div(fx::div((x - e.x_um) * k, dt64), 1000) * drawn;
+    let sy = fx::div(fx::div((y - e.y_um) * k, dt64), 1000) * drawn;
     let (cx, cy) = (clamp_mm(sx), clamp_mm(sy));
     (cx, cy, ((cx ^ sx) | (cy ^ sy)) != 0)
 }
@@ -137,9 +137,13 @@ fn draw<B: GlobalBus + ?Sized>(
 ) -> Result<Flags, Error> {
     let (disks, n) = cover(x, y, sweep.0, sweep.1, r);
     let mut f = Flags::default();
-    for d in &disks[..n] {
-        let im = images(d)?;
-        f.merge(apply(&im, &mut BusCanvas(&mut *g), op));
+    // An index loop: the slice loop `&disks[..n]` compiled (opt-level z) to a loop that
+    // ended before its first pass on the 68k (found by `sim-host bench cspace`).
+    for (i, d) in disks.iter().enumerate() {
+        if i < n {
+            let im = images(d)?;
+            f.merge(apply(&im, &mut BusCanvas(&mut *g), op));
+        }
     }
     Ok(f)
 }
@@ -161,6 +165,13 @@ pub struct Outcome {
     pub error: Option<Error>,
 }
 
+/// The beacon of entry `i`. (A function of its own: inlined into `step`, the 68k build read
+/// beacon 0 for every entry; found by the image-against-host system test.)
+#[inline(never)]
+fn beacon_of(objects: &ObjectTable, i: u32) -> Beacon {
+    objects.beacons[OBSTACLE_BEACONS[i as usize] as usize]
+}
+
 fn entry_at(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
     let base = work_entry(i);
     WorkEntry::decode(&mut |w| g.read_u32(base + 4 * w))
@@ -170,64 +181,19 @@ fn entry_at(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
 /// `objects` just read: takes the next entry from the shared cursor and brings its image up
 /// to date.
 pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) -> Outcome {
-    // The semaphore: advance the shared cursor atomically.
-    let n = OBSTACLE_BEACONS.len() as u32;
-    let mut c = g.read_u32(WORK_GENERATION);
-    loop {
-        let found = g.cas_u32(WORK_GENERATION, c, c.wrapping_add(1));
-        if found == c {
-            break;
-        }
-        c = found;
-    }
-    let i = c % n;
-    let mut out = Outcome {
-        entry: i,
-        ..Default::default()
-    };
+    let i = next_entry(g);
     let claim = work_entry(i);
     if g.cas_u32(claim, 0, me) != 0 {
-        out.busy = true;
-        return out;
+        return Outcome {
+            entry: i,
+            busy: true,
+            ..Default::default()
+        };
     }
     let mut e = entry_at(g, i);
-    let b = &objects.beacons[OBSTACLE_BEACONS[i as usize] as usize];
-    if b.flags & beacon_flags::VALID != 0 {
-        let drawn = e.state & DRAWN != 0;
-        let (sx, sy, clamped) = sweep(&e, b.x_um, b.y_um, b.t_us);
-        out.clamped = clamped;
-        let (ox, oy) = sweep_of(&e);
-        let moved = !drawn
-            || (b.x_um - e.x_um).abs() > MOVE_UM
-            || (b.y_um - e.y_um).abs() > MOVE_UM
-            || (sx - ox).abs() > 1
-            || (sy - oy).abs() > 1;
-        if moved {
-            // New image first, then the old one goes: no void ever opens.
-            match draw(g, b.x_um, b.y_um, (sx, sy), OBSTACLE_R_UM, Op::Draw) {
-                Ok(f) => {
-                    out.flags.merge(f);
-                    if drawn {
-                        match draw(g, e.x_um, e.y_um, (ox, oy), e.r_um, Op::Erase) {
-                            Ok(f) => out.flags.merge(f),
-                            Err(err) => out.error = Some(err),
-                        }
-                    }
-                    e.x_um = b.x_um;
-                    e.y_um = b.y_um;
-                    e.r_um = OBSTACLE_R_UM;
-                    e.generation = b.t_us;
-                    e.reserved = ((sx as u32) << 16) | (sy as u32 & 0xFFFF);
-                    e.beacon = OBSTACLE_BEACONS[i as usize];
-                    e.state = (e.state | DRAWN).wrapping_add(1 << JOB_SHIFT);
-                    out.redrawn = true;
-                }
-                Err(err) => out.error = Some(err),
-            }
-        }
-    }
+    let b = beacon_of(objects, i);
+    let out = job(g, i, &b, &mut e);
     // Write the entry back with the claim still ours, then release it last.
-    e.claim = me;
     let base = work_entry(i);
     e.encode(&mut |w, v| {
         if w != 0 {
@@ -235,5 +201,75 @@ pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) ->
         }
     });
     g.write_u32(claim, 0);
+    out
+}
+
+/// The semaphore: advances the shared cursor atomically and returns the entry it pointed at.
+#[inline(never)]
+fn next_entry<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
+    let mut c = g.read_u32(WORK_GENERATION);
+    loop {
+        let found = g.cas_u32(WORK_GENERATION, c, c.wrapping_add(1));
+        if found == c {
+            return c % OBSTACLE_BEACONS.len() as u32;
+        }
+        c = found;
+    }
+}
+
+/// Whether entry `e` must be redrawn for beacon sample `b` with sweep (`sx`, `sy`): nothing
+/// drawn yet, or a new sample that moved the obstacle or changed its sweep. The sample the
+/// image was drawn from again changes nothing (passes run much faster than the sensing
+/// board's frames, and must not undo the sweep). Written with bitwise ors of compares: the
+/// short-circuit form compiled to a condition-code clobber on the 68k (docs/toolchain.md).
+#[inline(never)]
+fn needs_redraw(e: &WorkEntry, b: &Beacon, sx: i32, sy: i32) -> bool {
+    let (ox, oy) = sweep_of(e);
+    let fresh = (b.t_us != e.generation) as u32;
+    let moved = ((b.x_um - e.x_um).abs() > MOVE_UM) as u32
+        | ((b.y_um - e.y_um).abs() > MOVE_UM) as u32
+        | ((sx - ox).abs() > 1) as u32
+        | ((sy - oy).abs() > 1) as u32;
+    let undrawn = (e.state & DRAWN == 0) as u32;
+    (undrawn | (fresh & moved)) != 0
+}
+
+/// The work on claimed entry `i` (held in `e`, updated in place) for beacon sample `b`.
+#[inline(never)]
+fn job<B: GlobalBus + ?Sized>(g: &mut B, i: u32, b: &Beacon, e: &mut WorkEntry) -> Outcome {
+    let mut out = Outcome {
+        entry: i,
+        ..Default::default()
+    };
+    if b.flags & beacon_flags::VALID == 0 {
+        return out;
+    }
+    let drawn = e.state & DRAWN != 0;
+    let (sx, sy, clamped) = sweep(e, b.x_um, b.y_um, b.t_us);
+    out.clamped = clamped;
+    if !needs_redraw(e, b, sx, sy) {
+        return out;
+    }
+    // New image first, then the old one goes: no void ever opens.
+    match draw(g, b.x_um, b.y_um, (sx, sy), OBSTACLE_R_UM, Op::Draw) {
+        Ok(f) => {
+            out.flags.merge(f);
+            if drawn {
+                match draw(g, e.x_um, e.y_um, sweep_of(e), e.r_um, Op::Erase) {
+                    Ok(f) => out.flags.merge(f),
+                    Err(err) => out.error = Some(err),
+                }
+            }
+            e.x_um = b.x_um;
+            e.y_um = b.y_um;
+            e.r_um = OBSTACLE_R_UM;
+            e.generation = b.t_us;
+            e.reserved = ((sx as u32) << 16) | (sy as u32 & 0xFFFF);
+            e.beacon = OBSTACLE_BEACONS[i as usize];
+            e.state = (e.state | DRAWN).wrapping_add(1 << JOB_SHIFT);
+            out.redrawn = true;
+        }
+        Err(err) => out.error = Some(err),
+    }
     out
 }

@@ -24,7 +24,7 @@
 #![deny(missing_docs)]
 
 pub mod consts;
-pub mod fx;
+pub use fx;
 pub mod params;
 
 use fx::{div_shl, mul_shr, sqrt_q16};

@@ -172,9 +172,18 @@ impl TextStream {
             10,
             1,
         ];
+        // Digits by repeated subtraction (at most 9 per digit): no division (the M68k backend's DIVU.L clobbers
+        // %d0, llvm/llvm-project#224186; docs/toolchain.md).
         let mut started = false;
+        let mut rest = v;
         for p in POWERS {
-            let d = (v / p % 10) as u8;
+            let mut d = 0u8;
+            while rest >= p {
+                // The volatile read keeps LLVM from turning the loop back into a divide.
+                // SAFETY: a read of a local variable.
+                rest = unsafe { core::ptr::read_volatile(&rest) } - p;
+                d += 1;
+            }
             started |= d != 0 || p == 1;
             if started {
                 self.push(bus, &[b'0' + d]);

@@ -1,4 +1,4 @@
-//! The servo's two wide operations, for Q-format arithmetic in `i32`:
+//! The firmware's wide operations, for Q-format arithmetic in `i32`:
 //! `mul_shr(a, b, sh)` = round((a b) >> sh) and `div_shl(n, d, sh)` = (n 2^sh) / d, both
 //! saturated to `i32`.
 //!
@@ -8,6 +8,8 @@
 //! LLVM's M68k backend miscompiles its compare sequences (docs/toolchain.md). On the host it
 //! is the same arithmetic in `i64`; a system test runs both on the same inputs and requires
 //! identical bits.
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
 
 /// round((a * b) / 2^sh) saturated to `i32`; `sh` in 1..=32.
 #[inline]
@@ -176,4 +178,14 @@ mod tests {
             assert!((got - want).abs() <= 1e-4 * want.max(1.0), "{x}: {got}");
         }
     }
+}
+
+/// `a / b` truncated toward zero, saturated to `i32` (`i32::MIN / -1` gives `i32::MAX`;
+/// `b = 0` gives `i32::MAX` for `a >= 0`, else `i32::MIN`). Compiled `i32` division must not
+/// be used in firmware: the M68k backend encodes the 32-bit DIVS.L/DIVU.L with the remainder
+/// register fixed to %d0, which silently clobbers %d0 (llvm/llvm-project#224186;
+/// docs/toolchain.md). This goes through `__fx_div` in the runtime's assembly instead.
+#[inline]
+pub fn div(a: i32, b: i32) -> i32 {
+    div_shl(a, b, 0)
 }
