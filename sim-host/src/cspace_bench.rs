@@ -250,13 +250,23 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
         while sys.bus().read_u32(WORK_GENERATION).wrapping_sub(c0) < n + 1 {
             sys.run_cycles(CPU_HZ / 1000);
             waited += 1;
-            if waited > 2000 || sys.boards[0].state != RunState::Running {
+            if waited > 20_000 || sys.boards[0].state != RunState::Running {
                 let st = sys.boards[0].state;
                 let f = sys.fault(BoardId::Cspace0);
                 let log = sys.log_text(BoardId::Cspace0);
                 return Err(format!(
                     "table {k}: the image stopped working the list ({st:?}, fault {f:?}, log {log:?})"
                 ));
+            }
+        }
+        // Between jobs: no claim held (a job half done would show a half-drawn map).
+        let claims_held = |sys: &mut System| (0..n).any(|i| sys.bus().read_u32(work_entry(i)) != 0);
+        let mut slices = 0;
+        while claims_held(&mut sys) {
+            sys.run_cycles(500);
+            slices += 1;
+            if slices > 1_000_000 {
+                return Err(format!("table {k}: a job never ends"));
             }
         }
         let mut hb = vme_map::ArrayBus::new(&mut host);
@@ -277,7 +287,6 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
                 CSPACE_STRIPES as usize..(CSPACE_STRIPES + CSPACE_STRIPES_BYTES) as usize,
             ),
         ] {
-            // Claim words are 0 in both between jobs; the entry's first word is its claim.
             let (a, b) = (&sys.global[r.clone()], &host[r.clone()]);
             if let Some(i) = (0..a.len()).find(|&i| a[i] != b[i]) {
                 let words = |m: &[u8]| -> Vec<String> {

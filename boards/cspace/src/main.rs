@@ -26,3 +26,88 @@ fn safe_stop() {
     // SAFETY: called by the runtime on this board, where the private I/O is mapped.
     board_cspace::safe(&mut unsafe { MmioIo::new() });
 }
+
+/// Test probe (never called by the board): the images of the disk (`x_um`, `y_um`,
+/// `r_um`) as this image computes them, written to `out` as 205 words: stripe lo, hi, full;
+/// then front and rear each as present, wraps, 33 theta1, 33 upper, 33 lower. Returns 0, or
+/// -1 when the disk has no images (too large). The system tests compare it with the host.
+#[no_mangle]
+#[link_section = ".text.probe.cspace_images"]
+pub extern "C" fn cspace_probe_images(x_um: i32, y_um: i32, r_um: i32, out: *mut i32) -> i32 {
+    let Ok(im) = cspace::images(&cspace::Disk { x_um, y_um, r_um }) else {
+        return -1;
+    };
+    // Written straight through `out`: a local array indexed in a loop is miscompiled on the
+    // 68k (llvm/llvm-project#200984).
+    // SAFETY: the caller passes a buffer of 205 words.
+    let put = |i: usize, v: i32| unsafe { out.add(i).write(v) };
+    for i in 0..205 {
+        put(i, 0);
+    }
+    if let Some(s) = im.stripe {
+        put(0, s.lo_u);
+        put(1, s.hi_u);
+        put(2, s.full as i32);
+    }
+    // Front and rear one at a time (no local array of them: see above).
+    if let Some(s) = &im.front {
+        put(3, 1);
+        put(4, s.wraps as i32);
+        probe_shape(s, out, 5);
+    }
+    if let Some(s) = &im.rear {
+        put(104, 1);
+        put(105, s.wraps as i32);
+        probe_shape(s, out, 106);
+    }
+    0
+}
+
+/// Writes a shape's chains through `out` from word `at` (through a reference: see above).
+#[inline(never)]
+fn probe_shape(s: &cspace::Shape, out: *mut i32, at: usize) {
+    for k in 0..33 {
+        // SAFETY: within the caller's 205-word buffer.
+        unsafe {
+            out.add(at + k).write(s.theta1_u[k]);
+            out.add(at + 33 + k).write(s.upper_u[k]);
+            out.add(at + 66 + k).write(s.lower_u[k]);
+        }
+    }
+}
+
+/// Test probe (never called by the board): draws the images of the disk (`x_um`, `y_um`,
+/// `r_um`) into the map and stripe layer in global RAM as this image rasterises them.
+/// Returns 0, or -1 when the disk has no images.
+#[no_mangle]
+#[link_section = ".text.probe.cspace_draw"]
+pub extern "C" fn cspace_probe_draw(x_um: i32, y_um: i32, r_um: i32) -> i32 {
+    let Ok(im) = cspace::images(&cspace::Disk { x_um, y_um, r_um }) else {
+        return -1;
+    };
+    // SAFETY: only ever called on an emulated board, where global RAM is mapped.
+    let mut g = unsafe { MmioGlobal::new() };
+    cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
+    0
+}
+
+/// Test probe (never called by the board): the columns the raster paints for the front
+/// image of the disk, eight words each into `out` (room for `max` columns); returns the
+/// number of columns, or -1 without a front image.
+#[no_mangle]
+#[link_section = ".text.probe.cspace_columns"]
+pub extern "C" fn cspace_probe_columns(
+    x_um: i32,
+    y_um: i32,
+    r_um: i32,
+    out: *mut i32,
+    max: usize,
+) -> i32 {
+    let Ok(im) = cspace::images(&cspace::Disk { x_um, y_um, r_um }) else {
+        return -1;
+    };
+    let Some(s) = &im.front else { return -1 };
+    // SAFETY: the caller passes a buffer of 8 * max words.
+    let buf = unsafe { core::slice::from_raw_parts_mut(out, 8 * max) };
+    cspace::raster::columns(s, buf) as i32
+}

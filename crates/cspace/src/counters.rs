@@ -38,8 +38,10 @@ impl Flags {
 const HIGH: u32 = 0x8080_8080;
 
 /// Adds one to each counter of `word` selected by `mask` (a sum of [`P1`], [`M1`], [`P2`],
-/// [`M2`]).
-#[inline]
+/// [`M2`]). (Always inlined: called, its struct return went through the 68k backend's
+/// broken convention that pops a stack word the caller never pushed, overwriting the
+/// caller's last local; docs/toolchain.md.)
+#[inline(always)]
 pub fn increment(word: u32, mask: u32) -> (u32, Flags) {
     if word & HIGH == 0 {
         return (word + mask, Flags::default());
@@ -47,8 +49,9 @@ pub fn increment(word: u32, mask: u32) -> (u32, Flags) {
     slow(word, mask, true)
 }
 
-/// Takes one from each counter of `word` selected by `mask`.
-#[inline]
+/// Takes one from each counter of `word` selected by `mask`. (Always inlined: see
+/// [`increment`].)
+#[inline(always)]
 pub fn decrement(word: u32, mask: u32) -> (u32, Flags) {
     // Every byte below 128 and every selected byte at least 1: no borrow crosses a byte.
     if word & HIGH == 0 && ((word | HIGH) - mask) & HIGH == HIGH {
@@ -57,10 +60,16 @@ pub fn decrement(word: u32, mask: u32) -> (u32, Flags) {
     slow(word, mask, false)
 }
 
-#[inline(never)]
 fn slow(word: u32, mask: u32, up: bool) -> (u32, Flags) {
-    let mut out = 0u32;
     let mut f = Flags::default();
+    let out = slow_into(word, mask, up, &mut f);
+    (out, f)
+}
+
+/// The byte-by-byte update; flags through `f` (no struct return: see [`increment`]).
+#[inline(never)]
+fn slow_into(word: u32, mask: u32, up: bool, f: &mut Flags) -> u32 {
+    let mut out = 0u32;
     for shift in [24u32, 16, 8, 0] {
         let mut b = (word >> shift) as u8;
         if (mask >> shift) & 1 != 0 {
@@ -79,7 +88,7 @@ fn slow(word: u32, mask: u32, up: bool) -> (u32, Flags) {
         }
         out |= (b as u32) << shift;
     }
-    (out, f)
+    out
 }
 
 #[cfg(test)]

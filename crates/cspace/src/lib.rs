@@ -137,13 +137,24 @@ pub fn chain_shape(table: &ChainTable, r_um: i32, alpha_u: i32) -> Option<Shape>
     let s = table.samples;
     let (i, f) = bracket(s.iter().map(|c| c.r_um), r_um)?;
     let (a, b) = (&s[i], s.get(i + 1).unwrap_or(&s[i]));
-    let half = lerp(a.half1_u, b.half1_u, f).min(HALF_REV);
     let mut shape = Shape {
         theta1_u: [0; CHAIN],
         upper_u: [0; CHAIN],
         lower_u: [0; CHAIN],
-        wraps: half >= HALF_REV,
+        wraps: false,
     };
+    fill(&mut shape, a, b, f, table.center2_u, alpha_u);
+    Some(shape)
+}
+
+/// Interpolates between samples `a` and `b` at Q16 fraction `f` into `shape`, shifted by
+/// `alpha_u`. (A function of its own that writes through a reference: the 68k backend drops
+/// the index register when a function indexes an array on its own stack frame,
+/// llvm/llvm-project#200984; docs/toolchain.md.)
+#[inline(never)]
+fn fill(shape: &mut Shape, a: &db::ChainSample, b: &db::ChainSample, f: i32, c2: i32, alpha: i32) {
+    let half = lerp(a.half1_u, b.half1_u, f).min(HALF_REV);
+    shape.wraps = half >= HALF_REV;
     for k in 0..CHAIN {
         shape.upper_u[k] = lerp(a.upper_u[k], b.upper_u[k], f);
     }
@@ -156,14 +167,13 @@ pub fn chain_shape(table: &ChainTable, r_um: i32, alpha_u: i32) -> Option<Shape>
         shape.theta1_u[CHAIN - 1 - k] = -t;
     }
     for k in 0..CHAIN {
-        shape.lower_u[k] = 2 * table.center2_u - shape.upper_u[CHAIN - 1 - k];
+        shape.lower_u[k] = 2 * c2 - shape.upper_u[CHAIN - 1 - k];
     }
     for k in 0..CHAIN {
-        shape.theta1_u[k] += alpha_u;
-        shape.upper_u[k] += alpha_u;
-        shape.lower_u[k] += alpha_u;
+        shape.theta1_u[k] += alpha;
+        shape.upper_u[k] += alpha;
+        shape.lower_u[k] += alpha;
     }
-    Some(shape)
 }
 
 /// The link-1 stripe half-width for a disk at radius `r_um` (`None`: link 1 cannot reach).
@@ -205,12 +215,27 @@ pub fn images(disk: &Disk) -> Result<Images, Error> {
         hi_u: alpha + h,
         full: h >= HALF_REV,
     });
-    let find = |tables: &[ChainTable]| tables.iter().find_map(|t| chain_shape(t, r, alpha));
-    Ok(Images {
+    let mut im = Images {
         stripe,
-        front: find(fam.front),
-        rear: find(fam.rear),
-    })
+        front: None,
+        rear: None,
+    };
+    find_shape(fam.front, r, alpha, &mut im.front);
+    find_shape(fam.rear, r, alpha, &mut im.rear);
+    Ok(im)
+}
+
+/// The image of the first of `tables` that holds radius `r_um`, into `out`. (Written through
+/// a reference: the 68k backend miscompiles aggregates built on a function's own frame,
+/// llvm/llvm-project#200984.)
+#[inline(never)]
+fn find_shape(tables: &[ChainTable], r_um: i32, alpha_u: i32, out: &mut Option<Shape>) {
+    for t in tables {
+        if let Some(s) = chain_shape(t, r_um, alpha_u) {
+            *out = Some(s);
+            return;
+        }
+    }
 }
 
 /// Draws (`Op::Draw`) or erases (`Op::Erase`) `images` on `canvas`.
@@ -219,7 +244,11 @@ pub fn apply<C: Canvas>(images: &Images, canvas: &mut C, op: Op) -> Flags {
     if let Some(s) = &images.stripe {
         f.merge(raster::stripe(s, canvas, op));
     }
-    for s in [&images.front, &images.rear].into_iter().flatten() {
+    // One at a time, not through a local array of them (llvm/llvm-project#200984).
+    if let Some(s) = &images.front {
+        f.merge(raster::shape(s, canvas, op));
+    }
+    if let Some(s) = &images.rear {
         f.merge(raster::shape(s, canvas, op));
     }
     f

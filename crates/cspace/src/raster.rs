@@ -92,6 +92,7 @@ fn pix(u: i32) -> i32 {
 }
 
 /// Draws or erases a link-1 stripe on the stripe layer.
+#[inline(never)]
 pub fn stripe<C: Canvas>(s: &Stripe, canvas: &mut C, op: Op) -> Flags {
     let mut f = Flags::default();
     if s.full || s.hi_u - s.lo_u >= crate::UNITS_PER_REV - UNITS_PER_PIXEL {
@@ -148,81 +149,154 @@ fn slope_mask(a: i32, b: i32, rising: u32, falling: u32) -> u32 {
     (rising & up) | (falling & down)
 }
 
-/// Draws or erases a link-2 image on the map.
+/// One column of an image: which pixels to update with which counters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Column {
+    /// Map column, 0..128.
+    col: u32,
+    /// First row (unwrapped).
+    first: i32,
+    /// Rows to update, at most 128 (128: the whole column, every counter).
+    rows: u32,
+    /// Rows from `first` that the lower chain crosses.
+    lower_rows: u32,
+    /// Offset from `first` of the first row the upper chain crosses.
+    upper_from: u32,
+    /// Counters of lower-chain rows.
+    lower_mask: u32,
+    /// Counters of upper-chain rows.
+    upper_mask: u32,
+    /// Added to boundary rows: the image's first or last column.
+    ends: u32,
+}
+
+/// The column `c` (unwrapped) of image `s` whose theta1 columns run `c0..=c1`; `k` is the
+/// chain segment holding the strip's left edge, advanced as the columns go.
+#[inline(never)]
+fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize) -> Column {
+    let t = &s.theta1_u;
+    let n = t.len();
+    let a = (c * UNITS_PER_PIXEL).max(t[0]);
+    let b = (c * UNITS_PER_PIXEL + UNITS_PER_PIXEL).min(t[n - 1]);
+    // Extremes of both chains over [a, b]: at its ends and at the vertices inside.
+    while *k + 2 < n && t[*k + 1] <= a {
+        *k += 1;
+    }
+    let (ua, la) = (
+        eval(t, &s.upper_u, *k, a, true),
+        eval(t, &s.lower_u, *k, a, false),
+    );
+    let (mut umax, mut umin, mut lmax, mut lmin) = (ua, ua, la, la);
+    let mut j = *k;
+    while j + 2 < n && t[j + 1] < b {
+        j += 1;
+        let (u, l) = (s.upper_u[j] + 1, s.lower_u[j] - 1);
+        umax = umax.max(u);
+        umin = umin.min(u);
+        lmax = lmax.max(l);
+        lmin = lmin.min(l);
+    }
+    let (ub, lb) = (
+        eval(t, &s.upper_u, j, b, true),
+        eval(t, &s.lower_u, j, b, false),
+    );
+    umax = umax.max(ub);
+    umin = umin.min(ub);
+    lmax = lmax.max(lb);
+    lmin = lmin.min(lb);
+    let first = pix(lmin);
+    let span = pix(umax) - first + 1;
+    let ends = if s.wraps {
+        0
+    } else if c == c0 {
+        M1
+    } else if c == c1 {
+        P1
+    } else {
+        0
+    };
+    Column {
+        col: c as u32 & WRAP,
+        first,
+        rows: span.clamp(1, CSPACE_SIDE as i32) as u32,
+        lower_rows: (pix(lmax) - first + 1).max(0) as u32,
+        upper_from: (pix(umin) - first).max(0) as u32,
+        lower_mask: M2 | slope_mask(la, lb, P1, M1),
+        upper_mask: P2 | slope_mask(ua, ub, M1, P1),
+        ends,
+    }
+}
+
+/// Updates the pixels of one column. The masks are chosen without branches (sign
+/// arithmetic: every count is below 2^8), the selects the compiler made of the plain form
+/// clobbered the condition codes on the 68k (docs/toolchain.md).
+#[inline(never)]
+fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
+    let mut f = Flags::default();
+    // All ones when the whole column is taken (every counter of every row).
+    let full = ((CSPACE_SIDE as i32 - 1 - k.rows as i32) >> 31) as u32;
+    for j in 0..k.rows {
+        let j = j as i32;
+        let lower = ((j - k.lower_rows as i32) >> 31) as u32; // all ones below lower_rows
+        let upper = !(((j - k.upper_from as i32) >> 31) as u32); // all ones from upper_from
+        let m = (k.lower_mask & lower) | (k.upper_mask & upper);
+        // All ones on a boundary row (some edge counter), zero inside.
+        let edge = (((m as i32).wrapping_neg()) >> 31) as u32 & !full;
+        let mask = ((m | k.ends) & edge) | (ALL & !edge);
+        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, mask, op));
+    }
+    f
+}
+
+/// Draws or erases a link-2 image on the map. (Not inlined: its callers hold the image on
+/// their stack frame, and the 68k backend drops the index register when a function indexes
+/// its own frame's arrays, llvm/llvm-project#200984.)
+#[inline(never)]
 pub fn shape<C: Canvas>(s: &Shape, canvas: &mut C, op: Op) -> Flags {
     let mut f = Flags::default();
     let t = &s.theta1_u;
-    let (t_first, t_last) = (t[0] - 1, t[t.len() - 1] + 1);
     let (c0, c1) = if s.wraps {
         let c0 = pix(t[0]);
         (c0, c0 + CSPACE_SIDE as i32)
     } else {
-        (pix(t_first), pix(t_last))
+        (pix(t[0] - 1), pix(t[t.len() - 1] + 1))
     };
-    let n = t.len();
     let mut k = 0usize; // segment holding the strip's left edge
     for c in c0..c1 + 1 {
-        let a = (c * UNITS_PER_PIXEL).max(t[0]);
-        let b = (c * UNITS_PER_PIXEL + UNITS_PER_PIXEL).min(t[n - 1]);
-        // Extremes of both chains over [a, b].
-        while k + 2 < n && t[k + 1] <= a {
-            k += 1;
-        }
-        let (ua, la) = (
-            eval(t, &s.upper_u, k, a, true),
-            eval(t, &s.lower_u, k, a, false),
-        );
-        let (mut umax, mut umin, mut lmax, mut lmin) = (ua, ua, la, la);
-        let mut j = k;
-        while j + 2 < n && t[j + 1] < b {
-            j += 1;
-            let (u, l) = (s.upper_u[j] + 1, s.lower_u[j] - 1);
-            umax = umax.max(u);
-            umin = umin.min(u);
-            lmax = lmax.max(l);
-            lmin = lmin.min(l);
-        }
-        let (ub, lb) = (
-            eval(t, &s.upper_u, j, b, true),
-            eval(t, &s.lower_u, j, b, false),
-        );
-        umax = umax.max(ub);
-        umin = umin.min(ub);
-        lmax = lmax.max(lb);
-        lmin = lmin.min(lb);
-        let first = pix(lmin);
-        let last = pix(umax);
-        let col = c as u32 & WRAP;
-        if last - first + 1 >= CSPACE_SIDE as i32 {
-            for r in 0..CSPACE_SIDE {
-                f.merge(canvas.pixel(col, r, ALL, op));
-            }
-            continue;
-        }
-        let lower_to = pix(lmax);
-        let upper_from = pix(umin);
-        let upper_mask = P2 | slope_mask(ua, ub, M1, P1);
-        let lower_mask = M2 | slope_mask(la, lb, P1, M1);
-        let ends = if s.wraps {
-            0
-        } else if c == c0 {
-            M1
-        } else if c == c1 {
-            P1
-        } else {
-            0
-        };
-        for r in first..last + 1 {
-            let mut m = 0;
-            if r <= lower_to {
-                m |= lower_mask;
-            }
-            if r >= upper_from {
-                m |= upper_mask;
-            }
-            let m = if m == 0 { ALL } else { m | ends };
-            f.merge(canvas.pixel(col, r as u32 & WRAP, m, op));
-        }
+        let col = column(s, c, c0, c1, &mut k);
+        f.merge(paint(canvas, &col, op));
     }
     f
+}
+
+/// The columns [`shape`] would paint for `s`, eight words each (column, first row, rows,
+/// lower rows, upper offset, lower mask, upper mask, end mask) into `out`, as many as fit;
+/// returns the number of columns. For the image-against-host tests.
+#[inline(never)]
+pub fn columns(s: &Shape, out: &mut [i32]) -> usize {
+    let t = &s.theta1_u;
+    let (c0, c1) = if s.wraps {
+        let c0 = pix(t[0]);
+        (c0, c0 + CSPACE_SIDE as i32)
+    } else {
+        (pix(t[0] - 1), pix(t[t.len() - 1] + 1))
+    };
+    let mut k = 0usize;
+    let mut n = 0usize;
+    for c in c0..c1 + 1 {
+        let col = column(s, c, c0, c1, &mut k);
+        if 8 * n + 8 <= out.len() {
+            let w = &mut out[8 * n..8 * n + 8];
+            w[0] = col.col as i32;
+            w[1] = col.first;
+            w[2] = col.rows as i32;
+            w[3] = col.lower_rows as i32;
+            w[4] = col.upper_from as i32;
+            w[5] = col.lower_mask as i32;
+            w[6] = col.upper_mask as i32;
+            w[7] = col.ends as i32;
+        }
+        n += 1;
+    }
+    n
 }

@@ -122,8 +122,27 @@ pub fn host_sqrt_q16(x_q16: i32) -> i32 {
     (isqrt_u32(x << s) << ((16 - s) / 2)) as i32
 }
 
+/// `a / b` truncated toward zero, saturated to `i32` (`i32::MIN / -1` gives `i32::MAX`;
+/// `b = 0` gives `i32::MAX` for `a >= 0`, else `i32::MIN`). Compiled `i32` division must not
+/// be used in firmware: the M68k backend encodes the 32-bit DIVS.L/DIVU.L with the remainder
+/// register fixed to %d0, which silently clobbers %d0 (llvm/llvm-project#224186;
+/// docs/toolchain.md). This goes through `__fx_div` in the runtime's assembly instead.
+#[inline]
+pub fn div(a: i32, b: i32) -> i32 {
+    div_shl(a, b, 0)
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn div_truncates_and_saturates() {
+        assert_eq!(div(7, 2), 3);
+        assert_eq!(div(-7, 2), -3);
+        assert_eq!(div(i32::MIN, -1), i32::MAX);
+        assert_eq!(div(5, 0), i32::MAX);
+        assert_eq!(div(-5, 0), i32::MIN);
+    }
+
     use super::*;
 
     #[test]
@@ -178,14 +197,4 @@ mod tests {
             assert!((got - want).abs() <= 1e-4 * want.max(1.0), "{x}: {got}");
         }
     }
-}
-
-/// `a / b` truncated toward zero, saturated to `i32` (`i32::MIN / -1` gives `i32::MAX`;
-/// `b = 0` gives `i32::MAX` for `a >= 0`, else `i32::MIN`). Compiled `i32` division must not
-/// be used in firmware: the M68k backend encodes the 32-bit DIVS.L/DIVU.L with the remainder
-/// register fixed to %d0, which silently clobbers %d0 (llvm/llvm-project#224186;
-/// docs/toolchain.md). This goes through `__fx_div` in the runtime's assembly instead.
-#[inline]
-pub fn div(a: i32, b: i32) -> i32 {
-    div_shl(a, b, 0)
 }
