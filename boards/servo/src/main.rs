@@ -37,3 +37,35 @@ fn safe_stop() {
     // SAFETY: called by the runtime on this board, where the private I/O is mapped.
     board_servo::safe(&mut unsafe { MmioIo::new() });
 }
+
+/// Test probe (never called by the board): runs a fresh servo with the image's constants
+/// over `n` passes of scripted inputs (`inputs`: five words per pass: encoder 1, encoder 2,
+/// timer, link-1 goal, link-2 goal in micro-radians) and writes four words per pass to `out`:
+/// both DAC codes and both observed velocities (Q16). The system tests compare it with the
+/// host.
+#[no_mangle]
+#[link_section = ".text.probe.servo_run"]
+pub extern "C" fn servo_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> i32 {
+    let mut s = servo::Servo::with_links(&TUNED_AT_IMAGE_HZ);
+    for i in 0..n as usize {
+        // SAFETY: the caller passes 5 n input words and room for 4 n output words.
+        let w = |k: usize| unsafe { inputs.add(5 * i + k).read() };
+        let input = servo::Input {
+            enc: [w(0) as u16, w(1) as u16],
+            timer: w(2) as u16,
+            subgoal: Some(servo::Subgoal {
+                goal_urad: [w(3) as i32, w(4) as i32],
+                cycle: i as u32,
+            }),
+        };
+        let o = s.step(&input);
+        // SAFETY: as above.
+        unsafe {
+            out.add(4 * i).write(o.dac[0] as i32);
+            out.add(4 * i + 1).write(o.dac[1] as i32);
+            out.add(4 * i + 2).write(o.omega_q16[0]);
+            out.add(4 * i + 3).write(o.omega_q16[1]);
+        }
+    }
+    0
+}
