@@ -207,11 +207,11 @@ pub fn report(dir: &Path) -> Result<String, String> {
     );
     let _ = writeln!(
         o,
-        "refresh rate of 5 moving obstacles (redraws per obstacle per second, 1 s emulated):"
+        "refresh rate of 5 moving obstacles (redraws per obstacle per second, 3 s emulated):"
     );
     let mut one = 0.0;
     for n in 1..=3 {
-        let r = refresh_rate(dir, n, 1.0)?;
+        let r = refresh_rate(dir, n, 3.0)?;
         if n == 1 {
             one = r;
         }

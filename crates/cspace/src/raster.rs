@@ -67,7 +67,7 @@ impl Canvas for SliceCanvas<'_> {
 pub struct BusCanvas<'a, B: GlobalBus + ?Sized>(pub &'a mut B);
 
 impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
-    #[inline]
+    #[inline(always)]
     fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags {
         let a = cspace_counter(i1, i2, 0);
         let (v, f) = update(self.0.read_u32(a), mask, op);
@@ -227,23 +227,40 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize) -> Column {
     }
 }
 
-/// Updates the pixels of one column. The masks are chosen without branches (sign
-/// arithmetic: every count is below 2^8), the selects the compiler made of the plain form
-/// clobbered the condition codes on the 68k (docs/toolchain.md).
+/// Updates the pixels of one column: the boundary rows one by one with their edge counters,
+/// the run between them with all four in a loop of its own (most pixels are inside). The
+/// masks are chosen without branches (sign arithmetic: every count is below 2^8), the selects
+/// the compiler made of the plain form clobbered the condition codes on the 68k
+/// (docs/toolchain.md).
 #[inline(never)]
 fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
     let mut f = Flags::default();
+    let rows = k.rows as i32;
     // All ones when the whole column is taken (every counter of every row).
-    let full = ((CSPACE_SIDE as i32 - 1 - k.rows as i32) >> 31) as u32;
-    for j in 0..k.rows {
-        let j = j as i32;
+    let full = ((CSPACE_SIDE as i32 - 1 - rows) >> 31) as u32;
+    // Interior run [lo, hi): after the lower boundary rows, before the upper ones.
+    let lo = (k.lower_rows as i32).min(rows);
+    let hi = (k.upper_from as i32).max(lo).min(rows);
+    // A full column is all interior.
+    let (lo, hi) = (
+        lo & !(full as i32),
+        (hi & !(full as i32)) | (rows & full as i32),
+    );
+    let edge_row = |j: i32| {
         let lower = ((j - k.lower_rows as i32) >> 31) as u32; // all ones below lower_rows
         let upper = !(((j - k.upper_from as i32) >> 31) as u32); // all ones from upper_from
         let m = (k.lower_mask & lower) | (k.upper_mask & upper);
-        // All ones on a boundary row (some edge counter), zero inside.
-        let edge = (((m as i32).wrapping_neg()) >> 31) as u32 & !full;
-        let mask = ((m | k.ends) & edge) | (ALL & !edge);
-        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, mask, op));
+        let edge = (((m as i32).wrapping_neg()) >> 31) as u32;
+        ((m | k.ends) & edge) | (ALL & !edge)
+    };
+    for j in 0..lo {
+        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, edge_row(j), op));
+    }
+    for j in lo..hi {
+        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, ALL, op));
+    }
+    for j in hi..rows {
+        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, edge_row(j), op));
     }
     f
 }
