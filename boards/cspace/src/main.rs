@@ -90,24 +90,3 @@ pub extern "C" fn cspace_probe_draw(x_um: i32, y_um: i32, r_um: i32) -> i32 {
     cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
     0
 }
-
-/// Test probe (never called by the board): the columns the raster paints for the front
-/// image of the disk, eight words each into `out` (room for `max` columns); returns the
-/// number of columns, or -1 without a front image.
-#[no_mangle]
-#[link_section = ".text.probe.cspace_columns"]
-pub extern "C" fn cspace_probe_columns(
-    x_um: i32,
-    y_um: i32,
-    r_um: i32,
-    out: *mut i32,
-    max: usize,
-) -> i32 {
-    let Ok(im) = cspace::images(&cspace::Disk { x_um, y_um, r_um }) else {
-        return -1;
-    };
-    let Some(s) = &im.front else { return -1 };
-    // SAFETY: the caller passes a buffer of 8 * max words.
-    let buf = unsafe { core::slice::from_raw_parts_mut(out, 8 * max) };
-    cspace::raster::columns(s, buf) as i32
-}

@@ -285,35 +285,3 @@ pub fn shape<C: Canvas>(s: &Shape, canvas: &mut C, op: Op) -> Flags {
     }
     f
 }
-
-/// The columns [`shape`] would paint for `s`, eight words each (column, first row, rows,
-/// lower rows, upper offset, lower mask, upper mask, end mask) into `out`, as many as fit;
-/// returns the number of columns. For the image-against-host tests.
-#[inline(never)]
-pub fn columns(s: &Shape, out: &mut [i32]) -> usize {
-    let t = &s.theta1_u;
-    let (c0, c1) = if s.wraps {
-        let c0 = pix(t[0]);
-        (c0, c0 + CSPACE_SIDE as i32)
-    } else {
-        (pix(t[0] - 1), pix(t[t.len() - 1] + 1))
-    };
-    let mut k = 0usize;
-    let mut n = 0usize;
-    for c in c0..c1 + 1 {
-        let col = column(s, c, c0, c1, &mut k);
-        if 8 * n + 8 <= out.len() {
-            let w = &mut out[8 * n..8 * n + 8];
-            w[0] = col.col as i32;
-            w[1] = col.first;
-            w[2] = col.rows as i32;
-            w[3] = col.lower_rows as i32;
-            w[4] = col.upper_from as i32;
-            w[5] = col.lower_mask as i32;
-            w[6] = col.upper_mask as i32;
-            w[7] = col.ends as i32;
-        }
-        n += 1;
-    }
-    n
-}

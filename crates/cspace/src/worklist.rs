@@ -49,7 +49,7 @@ pub fn cover(
     let mut out = [Disk { x_um, y_um, r_um }; MAX_COVER];
     let (dx, dy) = (dx_mm * 1000, dy_mm * 1000);
     // Path length, rounded up (integer square root of the squared length in mm).
-    let len_mm = isqrt((dx_mm * dx_mm + dy_mm * dy_mm) as u32) as i32 + 1;
+    let len_mm = fx::isqrt_u32((dx_mm * dx_mm + dy_mm * dy_mm) as u32) as i32 + 1;
     if dx_mm == 0 && dy_mm == 0 {
         return (out, 1);
     }
@@ -76,25 +76,6 @@ pub fn cover(
         };
     }
     (out, n as usize)
-}
-
-fn isqrt(n: u32) -> u32 {
-    let mut x = n;
-    let mut r = 0u32;
-    let mut bit = 1u32 << 30;
-    while bit > n {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if x >= r + bit {
-            x -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
-        }
-        bit >>= 2;
-    }
-    r
 }
 
 /// The sweep (mm over [`LOOKAHEAD_MS`]) of an obstacle now at (`x`, `y`) at time `t_us`,
