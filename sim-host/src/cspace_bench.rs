@@ -112,7 +112,7 @@ pub fn refresh_rate(dir: &Path, n: usize, seconds: f64) -> Result<f64, String> {
     let jobs = |sys: &mut System| -> u64 {
         let mut bus = sys.bus();
         (0..5)
-            .map(|k| (bus.read_u32(work_entry(k) + 20) >> JOB_SHIFT) as u64)
+            .map(|k| (cspace::worklist::entry(&mut bus, k).state >> JOB_SHIFT) as u64)
             .sum()
     };
     let frame_cycles = CPU_HZ / 500;
@@ -172,7 +172,7 @@ pub fn report(dir: &Path) -> Result<String, String> {
     use std::fmt::Write as _;
     let radii: Vec<f64> = (0..=48).map(|i| 40.0 + 10.0 * i as f64).collect();
     let u = updates(dir, &radii)?;
-    let ms = |c: u64| c as f64 * 1e3 / CPU_HZ as f64;
+    let ms = |c: f64| c * 1e3 / CPU_HZ as f64;
     let worst = u.iter().max_by_key(|x| x.cycles).expect("radii");
     let mean = u.iter().map(|x| x.cycles).sum::<u64>() as f64 / u.len() as f64;
     let mut o = String::new();
@@ -194,16 +194,22 @@ pub fn report(dir: &Path) -> Result<String, String> {
     );
     let _ = writeln!(o, "{:>8} {:>10} {:>8}", "r (mm)", "cycles", "ms");
     for x in u.iter().step_by(8) {
-        let _ = writeln!(o, "{:>8.0} {:>10} {:>8.3}", x.r_mm, x.cycles, ms(x.cycles));
+        let _ = writeln!(
+            o,
+            "{:>8.0} {:>10} {:>8.3}",
+            x.r_mm,
+            x.cycles,
+            ms(x.cycles as f64)
+        );
     }
     let _ = writeln!(
         o,
         "worst {} cycles = {:.3} ms at r = {:.0} mm (target <= 3 ms; thesis 7-30 ms); mean {:.0} cycles = {:.3} ms",
         worst.cycles,
-        ms(worst.cycles),
+        ms(worst.cycles as f64),
         worst.r_mm,
         mean,
-        mean * 1e3 / CPU_HZ as f64
+        ms(mean)
     );
     let _ = writeln!(
         o,
@@ -234,7 +240,7 @@ pub fn report(dir: &Path) -> Result<String, String> {
 /// layer after each table (bit for bit): the image's compiled code against the host's.
 pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
     use vme_map::layout::{
-        CSPACE_MAP, CSPACE_MAP_BYTES, CSPACE_STRIPES, CSPACE_STRIPES_BYTES, WORK_GENERATION,
+        CSPACE_MAP, CSPACE_MAP_BYTES, CSPACE_STRIPES, CSPACE_STRIPES_BYTES, WORK_CURSOR,
     };
     let mut sys = System::power_up(dir, &[BoardId::Cspace0]).map_err(|e| e.to_string())?;
     sys.run_to_first_heartbeat(0)
@@ -245,9 +251,9 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
     for (k, t) in tables.iter().enumerate() {
         publish(&mut sys, t);
         // One whole round of the cursor after the table is in place, plus the job in flight.
-        let c0 = sys.bus().read_u32(WORK_GENERATION);
+        let c0 = sys.bus().read_u32(WORK_CURSOR);
         let mut waited = 0;
-        while sys.bus().read_u32(WORK_GENERATION).wrapping_sub(c0) < n + 1 {
+        while sys.bus().read_u32(WORK_CURSOR).wrapping_sub(c0) < n + 1 {
             sys.run_cycles(CPU_HZ / 1000);
             waited += 1;
             if waited > 20_000 || sys.boards[0].state != RunState::Running {
@@ -274,10 +280,7 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
             cspace::worklist::step(&mut hb, 1, t);
         }
         for (name, r) in [
-            (
-                "work list",
-                entries.start as usize + 4..entries.end as usize,
-            ),
+            ("work list", entries.start as usize..entries.end as usize),
             (
                 "map",
                 CSPACE_MAP as usize..(CSPACE_MAP + CSPACE_MAP_BYTES) as usize,
@@ -289,9 +292,9 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
         ] {
             let (a, b) = (&sys.global[r.clone()], &host[r.clone()]);
             if let Some(i) = (0..a.len()).find(|&i| a[i] != b[i]) {
+                // Eight words from the one that differs.
                 let words = |m: &[u8]| -> Vec<String> {
-                    let w0 =
-                        work_entry(0) as usize + ((r.start + i - work_entry(0) as usize) & !31);
+                    let w0 = (r.start + i) & !3;
                     (0..8)
                         .map(|j| {
                             let o = w0 + 4 * j;

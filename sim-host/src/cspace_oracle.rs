@@ -10,7 +10,7 @@
 //! collision; otherwise the square is split, down to 1/64 of a pixel (then "unknown").
 
 use arm::geometry::{Disk as ArmDisk, Pose};
-use cspace::{Disk, Op, SliceCanvas};
+use cspace::{Disk, Memory, Op};
 use std::f64::consts::TAU;
 
 /// Bound on how fast the clearance changes with the angles, metres per radian (see module).
@@ -87,49 +87,6 @@ pub fn pixel(disk: &Disk, i1: u32, i2: u32) -> Verdict {
     square_at(&d, pose, t1, t2, PIXEL_RAD / 2.0, 0)
 }
 
-/// A map and stripe layer on the host.
-#[derive(Clone)]
-pub struct HostMap {
-    /// 128 x 128 counter words, theta1 fastest.
-    pub map: Vec<u32>,
-    /// 128 stripe words.
-    pub stripes: Vec<u32>,
-}
-
-impl Default for HostMap {
-    fn default() -> Self {
-        Self {
-            map: vec![0; 128 * 128],
-            stripes: vec![0; 128],
-        }
-    }
-}
-
-impl HostMap {
-    /// A canvas over this map.
-    pub fn canvas(&mut self) -> SliceCanvas<'_> {
-        SliceCanvas {
-            map: &mut self.map,
-            stripes: &mut self.stripes,
-        }
-    }
-    /// Whether pixel (`i1`, `i2`) is occupied (its word or its column's stripe word).
-    pub fn occupied(&self, i1: u32, i2: u32) -> bool {
-        self.map[(i2 * 128 + i1) as usize] != 0 || self.stripes[i1 as usize] != 0
-    }
-    /// Whether every counter is zero.
-    pub fn is_clear(&self) -> bool {
-        self.map.iter().chain(&self.stripes).all(|&w| w == 0)
-    }
-    /// Occupied pixels.
-    pub fn count(&self) -> usize {
-        (0..128)
-            .flat_map(|i2| (0..128).map(move |i1| (i1, i2)))
-            .filter(|&(i1, i2)| self.occupied(i1, i2))
-            .count()
-    }
-}
-
 /// One disk checked against the oracle.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Check {
@@ -157,7 +114,7 @@ impl Check {
 /// and requires the map clear again.
 pub fn check_disk(disk: &Disk) -> Result<Check, cspace::Error> {
     let im = cspace::images(disk)?;
-    let mut m = HostMap::default();
+    let mut m = Memory::default();
     let f = cspace::apply(&im, &mut m.canvas(), Op::Draw);
     assert_eq!(f, cspace::Flags::default(), "one disk cannot saturate");
     let mut c = Check::default();
@@ -184,7 +141,7 @@ pub fn check_disk(disk: &Disk) -> Result<Check, cspace::Error> {
 /// The picture cells of `disks` drawn together (see [`crate::plots::cspace_map`]).
 pub fn cells(disks: &[Disk]) -> Result<Vec<crate::plots::MapCell>, cspace::Error> {
     use crate::plots::MapCell;
-    let mut m = HostMap::default();
+    let mut m = Memory::default();
     for d in disks {
         cspace::apply(&cspace::images(d)?, &mut m.canvas(), Op::Draw);
     }

@@ -134,7 +134,7 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
         global.iter_mut().for_each(|x| *x = 0);
         b.call(&mut global, probe_draw, &args, 100_000_000)
             .expect("probe returns");
-        let mut host = sim_host::cspace_oracle::HostMap::default();
+        let mut host = cspace::Memory::default();
         cspace::apply(&im, &mut host.canvas(), cspace::Op::Draw);
         for i in 0..128 * 128 {
             assert_eq!(

@@ -32,7 +32,7 @@ pub mod worklist;
 mod tables;
 
 pub use counters::Flags;
-pub use raster::{BusCanvas, Canvas, Op, SliceCanvas};
+pub use raster::{BusCanvas, Canvas, Memory, Op, SliceCanvas};
 
 use db::{ChainTable, Family, StripeSample, CHAIN, FAMILIES};
 
@@ -113,7 +113,7 @@ fn lerp(a: i32, b: i32, f_q16: i32) -> i32 {
 
 /// The bracket of `r_um` in sorted radii: index `i` and the Q16 fraction between `i` and
 /// `i + 1`; `None` outside.
-fn bracket(radii: impl Iterator<Item = i32> + Clone, r_um: i32) -> Option<(usize, i32)> {
+fn bracket(radii: impl Iterator<Item = i32>, r_um: i32) -> Option<(usize, i32)> {
     let mut prev: Option<i32> = None;
     for (i, r1) in radii.enumerate() {
         if let Some(r0) = prev {

@@ -83,6 +83,43 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
     }
 }
 
+/// A whole map and stripe layer in memory, for host-side tools and tests (64.5 KiB; the
+/// boards use [`BusCanvas`] on global RAM instead).
+#[derive(Clone)]
+pub struct Memory {
+    /// 128 x 128 counter words, theta1 fastest (as in global RAM).
+    pub map: [u32; (CSPACE_SIDE * CSPACE_SIDE) as usize],
+    /// 128 stripe words.
+    pub stripes: [u32; CSPACE_SIDE as usize],
+}
+
+impl Default for Memory {
+    fn default() -> Self {
+        Self {
+            map: [0; (CSPACE_SIDE * CSPACE_SIDE) as usize],
+            stripes: [0; CSPACE_SIDE as usize],
+        }
+    }
+}
+
+impl Memory {
+    /// A canvas over this map.
+    pub fn canvas(&mut self) -> SliceCanvas<'_> {
+        SliceCanvas {
+            map: &mut self.map,
+            stripes: &mut self.stripes,
+        }
+    }
+    /// Whether pixel (`i1`, `i2`) is occupied (its word or its column's stripe word).
+    pub fn occupied(&self, i1: u32, i2: u32) -> bool {
+        self.map[(i2 * CSPACE_SIDE + i1) as usize] != 0 || self.stripes[i1 as usize] != 0
+    }
+    /// Whether every counter is zero.
+    pub fn is_clear(&self) -> bool {
+        self.map.iter().chain(&self.stripes).all(|&w| w == 0)
+    }
+}
+
 const WRAP: u32 = CSPACE_SIDE - 1;
 
 /// Floor division by the pixel size (arithmetic shift: rounds toward minus infinity).

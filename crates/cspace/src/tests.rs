@@ -1,32 +1,6 @@
 use super::*;
 use proptest::prelude::*;
 
-struct Host {
-    map: Vec<u32>,
-    stripes: Vec<u32>,
-}
-
-impl Host {
-    fn new() -> Self {
-        Self {
-            map: vec![0; 128 * 128],
-            stripes: vec![0; 128],
-        }
-    }
-    fn canvas(&mut self) -> SliceCanvas<'_> {
-        SliceCanvas {
-            map: &mut self.map,
-            stripes: &mut self.stripes,
-        }
-    }
-    fn occupied(&self, i1: usize, i2: usize) -> bool {
-        self.map[i2 * 128 + i1] != 0 || self.stripes[i1] != 0
-    }
-    fn clear(&self) -> bool {
-        self.map.iter().chain(&self.stripes).all(|&w| w == 0)
-    }
-}
-
 fn disk(x_mm: f64, y_mm: f64, r_mm: f64) -> Disk {
     Disk {
         x_um: (x_mm * 1e3) as i32,
@@ -89,19 +63,19 @@ fn images_are_odd_symmetric_and_shift_with_the_polar_angle() {
 #[test]
 fn an_image_across_the_seam_of_the_torus_is_drawn_on_both_sides() {
     // A disk behind the shoulder (polar angle pi): its images straddle theta1 = +-pi.
-    let mut h = Host::new();
+    let mut h = Memory::default();
     let im = images(&disk(-400.0, 0.0, 25.4)).unwrap();
     apply(&im, &mut h.canvas(), Op::Draw);
-    let col = |i1: usize| (0..128).any(|i2| h.occupied(i1, i2));
+    let col = |i1: u32| (0..128).any(|i2| h.occupied(i1, i2));
     assert!(col(63) && col(64), "both sides of theta1 = pi");
     assert!(!col(0), "nothing at theta1 = 0");
     apply(&im, &mut h.canvas(), Op::Erase);
-    assert!(h.clear());
+    assert!(h.is_clear());
 }
 
 #[test]
 fn region_i_fills_the_stripe_layer_only() {
-    let mut h = Host::new();
+    let mut h = Memory::default();
     let im = images(&disk(10.0, 5.0, 10.0)).unwrap();
     apply(&im, &mut h.canvas(), Op::Draw);
     assert!(h.stripes.iter().all(|&w| w == counters::ALL));
@@ -115,7 +89,7 @@ fn region_i_fills_the_stripe_layer_only() {
 fn edge_normals_point_out_of_the_image() {
     // The front image of a disk on the x axis: its top rows count +theta2, its bottom rows
     // -theta2, its inside all four.
-    let mut h = Host::new();
+    let mut h = Memory::default();
     let im = images(&disk(450.0, 0.0, 25.4)).unwrap();
     raster::shape(im.front.as_ref().unwrap(), &mut h.canvas(), Op::Draw);
     let (mut top, mut bottom, mut inside) = (0, 0, 0);
@@ -143,7 +117,7 @@ fn edge_normals_point_out_of_the_image() {
 
 #[test]
 fn counters_saturate_and_report_instead_of_wrapping() {
-    let mut h = Host::new();
+    let mut h = Memory::default();
     let im = images(&disk(450.0, 0.0, 25.4)).unwrap();
     let mut flags = Flags::default();
     for _ in 0..300 {
@@ -154,7 +128,7 @@ fn counters_saturate_and_report_instead_of_wrapping() {
         apply(&im, &mut h.canvas(), Op::Erase);
     }
     assert!(
-        !h.clear(),
+        !h.is_clear(),
         "saturated counters stay set: the pixels stay occupied rather than open a void"
     );
 }
@@ -169,13 +143,13 @@ proptest! {
     fn moves_then_erase_leave_the_map_clear(
         moves in prop::collection::vec((0usize..3, -520_000i32..520_000, -520_000i32..520_000, 0i32..25_400), 1..12)
     ) {
-        let mut h = Host::new();
+        let mut h = Memory::default();
         let mut at: [Option<Images>; 3] = [None; 3];
         for (k, x, y, r) in moves {
             let new = images(&Disk { x_um: x, y_um: y, r_um: r }).unwrap();
             apply(&new, &mut h.canvas(), Op::Draw);
             // The new image is in place before the old one goes.
-            let mut only = Host::new();
+            let mut only = Memory::default();
             apply(&new, &mut only.canvas(), Op::Draw);
             for i2 in 0..128 {
                 for i1 in 0..128 {
@@ -190,6 +164,6 @@ proptest! {
         for im in at.iter().flatten() {
             apply(im, &mut h.canvas(), Op::Erase);
         }
-        prop_assert!(h.clear());
+        prop_assert!(h.is_clear());
     }
 }

@@ -10,7 +10,7 @@
 //! next refresh. An obstacle whose beacon turns invalid keeps its last image.
 
 use crate::{apply, images, BusCanvas, Disk, Error, Flags, Op, POLAR_MARGIN_UM};
-use vme_map::layout::{work_entry, WORK_GENERATION};
+use vme_map::layout::{work_entry, WORK_CURSOR};
 use vme_map::record::Record;
 use vme_map::records::{beacon_flags, Beacon, ObjectTable, WorkEntry};
 use vme_map::GlobalBus;
@@ -47,12 +47,12 @@ pub fn cover(
     r_um: i32,
 ) -> ([Disk; MAX_COVER], usize) {
     let mut out = [Disk { x_um, y_um, r_um }; MAX_COVER];
-    let (dx, dy) = (dx_mm * 1000, dy_mm * 1000);
-    // Path length, rounded up (integer square root of the squared length in mm).
-    let len_mm = fx::isqrt_u32((dx_mm * dx_mm + dy_mm * dy_mm) as u32) as i32 + 1;
     if dx_mm == 0 && dy_mm == 0 {
         return (out, 1);
     }
+    let (dx, dy) = (dx_mm * 1000, dy_mm * 1000);
+    // Path length, rounded up (integer square root of the squared length in mm).
+    let len_mm = fx::isqrt_u32((dx_mm * dx_mm + dy_mm * dy_mm) as u32) as i32 + 1;
     // The smallest family whose pieces need at most MAX_COVER disks.
     let mut n = MAX_COVER as i32;
     for f in crate::db::FAMILIES {
@@ -153,7 +153,8 @@ fn beacon_of(objects: &ObjectTable, i: u32) -> Beacon {
     objects.beacons[OBSTACLE_BEACONS[i as usize] as usize]
 }
 
-fn entry_at(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
+/// Work-list entry `i` as it is in global RAM.
+pub fn entry(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
     let base = work_entry(i);
     WorkEntry::decode(&mut |w| g.read_u32(base + 4 * w))
 }
@@ -171,14 +172,13 @@ pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) ->
             ..Default::default()
         };
     }
-    let mut e = entry_at(g, i);
+    let mut e = entry(g, i);
     let b = beacon_of(objects, i);
     let out = job(g, i, &b, &mut e);
     // Write the entry back with the claim still ours, then release it last.
-    let base = work_entry(i);
     e.encode(&mut |w, v| {
         if w != 0 {
-            g.write_u32(base + 4 * w, v)
+            g.write_u32(claim + 4 * w, v)
         }
     });
     g.write_u32(claim, 0);
@@ -188,9 +188,9 @@ pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) ->
 /// The semaphore: advances the shared cursor atomically and returns the entry it pointed at.
 #[inline(never)]
 fn next_entry<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
-    let mut c = g.read_u32(WORK_GENERATION);
+    let mut c = g.read_u32(WORK_CURSOR);
     loop {
-        let found = g.cas_u32(WORK_GENERATION, c, c.wrapping_add(1));
+        let found = g.cas_u32(WORK_CURSOR, c, c.wrapping_add(1));
         if found == c {
             return c % OBSTACLE_BEACONS.len() as u32;
         }

@@ -137,7 +137,7 @@ pub const HOST_COMMAND: SeqLock<HostCommand> = SeqLock::at(0x0640);
 
 /// C-space work list: the cursor (thesis line 1225's semaphore), the next entry to transform;
 /// changed only with `CAS.L` by the C-space boards (`crates/cspace`, module `worklist`).
-pub const WORK_GENERATION: u32 = 0x0800;
+pub const WORK_CURSOR: u32 = 0x0800;
 /// C-space work list: first entry (claim words: CAS by C-space boards).
 pub const WORK_LIST: u32 = 0x0810;
 /// Bytes per work-list entry.
@@ -260,8 +260,8 @@ pub const LAYOUT: [Region; 11] = [
     seq("host_command", HOST_COMMAND, Writer::Host),
     Region {
         name: "work_list",
-        offset: WORK_GENERATION,
-        size: WORK_LIST - WORK_GENERATION + WORK_ENTRIES as u32 * WORK_ENTRY_BYTES,
+        offset: WORK_CURSOR,
+        size: WORK_LIST - WORK_CURSOR + WORK_ENTRIES as u32 * WORK_ENTRY_BYTES,
         writer: Writer::CspaceBoards,
         seqlock: false,
     },
