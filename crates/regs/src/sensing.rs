@@ -4,6 +4,11 @@
 //! * LEDs: [`LED_SELECT`] picks one of the 8 beacons; [`LedCtrl::ENABLE`] in [`LED_CTRL`]
 //!   turns the selected beacon's LED on. [`LED_CURRENT`] reads back the drive current
 //!   (the feedback the thesis proposed against intensity differences), in mA.
+//!   [`LED_LEVEL`] sets the drive current for the selected beacon's next pulses, mA
+//!   (0..=[`LED_LEVEL_MAX_MA`], [`LED_LEVEL_RESET_MA`] after reset: the thesis's 560 mA).
+//! * Timer: [`TIMER`] counts at 2 MHz and wraps modulo 2^16, like the servo board's.
+//! * The position and sum signals pass a first-order analog filter of [`FILTER_TAU_US`]
+//!   before the converters; a track-and-hold captures all three at the start of conversion.
 //! * A/D: writing [`AdcCtrl::START`] to [`ADC_CTRL`] starts simultaneous 12-bit conversions of
 //!   the x and y position signals and the sum (intensity) signal. [`AdcStatus::BUSY`] is set
 //!   for the conversion time, then [`AdcStatus::EOC`] until the next start. Data registers are
@@ -19,6 +24,22 @@ pub const LED_SELECT: u32 = 0x10;
 pub const LED_CTRL: u32 = 0x12;
 /// LED drive current read-back in mA, read-only.
 pub const LED_CURRENT: u32 = 0x14;
+/// LED drive current set point in mA, read-write.
+pub const LED_LEVEL: u32 = 0x16;
+/// 2 MHz free-running counter, read-only.
+pub const TIMER: u32 = 0x30;
+/// Counts per second of [`TIMER`] (the same counter as the servo board's).
+pub const TIMER_HZ: u32 = crate::servo::TIMER_HZ;
+/// Largest LED drive current the driver delivers, mA.
+pub const LED_LEVEL_MAX_MA: u16 = 1000;
+/// LED drive current after reset, mA (the thesis's pulse current).
+pub const LED_LEVEL_RESET_MA: u16 = 560;
+/// Time constant of the analog filters in front of the converters, microseconds (thesis
+/// ch. II.3.2).
+pub const FILTER_TAU_US: u32 = 40;
+/// A/D conversion time, microseconds (a 12-bit successive-approximation converter).
+pub const ADC_CONVERSION_US: u32 = 25;
+
 /// A/D control, write-only.
 pub const ADC_CTRL: u32 = 0x20;
 /// A/D status, read-only.
@@ -34,7 +55,7 @@ pub const ADC_SUM: u32 = 0x28;
 pub const ADC_MAX: u16 = 4095;
 
 /// The sensing board's register table.
-pub const REGISTERS: [Register; 9] = [
+pub const REGISTERS: [Register; 11] = [
     Register {
         name: "BOARD_ID",
         offset: crate::BOARD_ID,
@@ -54,6 +75,11 @@ pub const REGISTERS: [Register; 9] = [
         name: "LED_CURRENT",
         offset: LED_CURRENT,
         access: Access::R,
+    },
+    Register {
+        name: "LED_LEVEL",
+        offset: LED_LEVEL,
+        access: Access::RW,
     },
     Register {
         name: "ADC_CTRL",
@@ -78,6 +104,11 @@ pub const REGISTERS: [Register; 9] = [
     Register {
         name: "ADC_SUM",
         offset: ADC_SUM,
+        access: Access::R,
+    },
+    Register {
+        name: "TIMER",
+        offset: TIMER,
         access: Access::R,
     },
 ];
@@ -153,6 +184,15 @@ impl<B: IoBus> SensingIo<B> {
             LedCtrl::empty()
         };
         self.bus.write16(LED_CTRL, c.bits());
+    }
+    /// Sets the drive current for the selected beacon's pulses, mA (clamped by the driver
+    /// to [`LED_LEVEL_MAX_MA`]).
+    pub fn set_level_ma(&mut self, ma: u16) {
+        self.bus.write16(LED_LEVEL, ma);
+    }
+    /// Reads the 2 MHz timer.
+    pub fn timer(&mut self) -> u16 {
+        self.bus.read16(TIMER)
     }
     /// Starts a conversion.
     pub fn start_conversion(&mut self) {

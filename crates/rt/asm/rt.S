@@ -117,15 +117,31 @@ memmove:                        /* void *memmove(void *dst, const void *src, siz
 
     .globl memset
 memset:                         /* void *memset(void *dst, int c, size_t n) */
-    movea.l 4(%sp), %a0
-    move.l  8(%sp), %d0
-    move.l  12(%sp), %d1
-1:  tst.l   %d1
-    beq.s   2f
+    move.l  %d2, -(%sp)         /* arguments now 4 bytes further up */
+    movea.l 8(%sp), %a0
+    moveq   #0, %d0
+    move.b  15(%sp), %d0        /* c's low byte (big-endian int at 12(%sp)) */
+    move.l  16(%sp), %d1
+    mulu.l  #0x01010101, %d0    /* the byte in all four lanes */
+    move.l  %a0, %d2
+    btst    #0, %d2
+    beq.s   1f
+    tst.l   %d1                 /* odd dst: one byte first, then longs */
+    beq.s   4f
     move.b  %d0, (%a0)+
     subq.l  #1, %d1
+1:  subq.l  #4, %d1             /* a long at a time: the 68020 stores one on any even address */
+    bcs.s   2f
+    move.l  %d0, (%a0)+
     bra.s   1b
-2:  move.l  4(%sp), %d0
+2:  addq.l  #4, %d1
+3:  tst.l   %d1
+    beq.s   4f
+    move.b  %d0, (%a0)+
+    subq.l  #1, %d1
+    bra.s   3b
+4:  move.l  (%sp)+, %d2
+    move.l  4(%sp), %d0
     movea.l %d0, %a0
     rts
 

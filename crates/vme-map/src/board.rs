@@ -143,6 +143,9 @@ pub enum FaultCode {
     /// An obstacle could not be transformed into C-space (larger than the image database
     /// holds): its old image stays.
     Untransformable = 13,
+    /// The sensing calibration table is missing, corrupt or implausible: positions are
+    /// published without the valid flag until a good one is written.
+    BadCalibration = 14,
 }
 
 impl FaultCode {
@@ -164,6 +167,7 @@ impl FaultCode {
             11 => LayoutMismatch,
             12 => MapCounter,
             13 => Untransformable,
+            14 => BadCalibration,
             _ => return Option::None,
         })
     }

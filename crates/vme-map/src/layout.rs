@@ -9,14 +9,15 @@ use crate::board::{BoardId, BoardState, FaultCode, FaultRecord, StatusWord};
 use crate::bus::GlobalBus;
 use crate::record::{Record, SeqLock};
 use crate::records::{
-    HostCommand, ObjectTable, PlannerGoal, ReflexSubgoal, ServoState, WorkEntry, WORK_ENTRIES,
+    cal, HostCommand, ObjectTable, PlannerGoal, RawTable, ReflexSubgoal, SensingConfig,
+    SensingDrift, ServoState, WorkEntry, WORK_ENTRIES,
 };
 use crate::GLOBAL_RAM_SIZE;
 
 /// Value of the header's magic word: ASCII "NW87" (Newman 1987).
 pub const MAGIC: u32 = 0x4E57_3837;
 /// Version of this layout; bumped by every incompatible change.
-pub const LAYOUT_VERSION: u32 = 2;
+pub const LAYOUT_VERSION: u32 = 3;
 
 /// Header: magic word (written by the host at power-up).
 pub const HEADER_MAGIC: u32 = 0x0000;
@@ -134,6 +135,12 @@ pub const REFLEX_SUBGOAL: SeqLock<ReflexSubgoal> = SeqLock::at(0x05C0);
 pub const PLANNER_GOAL: SeqLock<PlannerGoal> = SeqLock::at(0x0600);
 /// Host commands (writer: host).
 pub const HOST_COMMAND: SeqLock<HostCommand> = SeqLock::at(0x0640);
+/// How the sensing board runs (written by the host).
+pub const SENSING_CONFIG: SeqLock<SensingConfig> = SeqLock::at(0x0660);
+/// The sensing board's drift estimate.
+pub const SENSING_DRIFT: SeqLock<SensingDrift> = SeqLock::at(0x0678);
+/// The sensing board's raw signal table (what calibration records).
+pub const SENSING_RAW: SeqLock<RawTable> = SeqLock::at(0x0690);
 
 /// C-space work list: the cursor (thesis line 1225's semaphore), the next entry to transform;
 /// changed only with `CAS.L` by the C-space boards (`crates/cspace`, module `worklist`).
@@ -188,8 +195,13 @@ pub const fn log_ring(board: BoardId) -> u32 {
     LOG_RINGS + board.index() * LOG_RING_STRIDE
 }
 
+/// The sensing board's calibration table, written by the host ([`cal`] has the format).
+pub const SENSING_CAL: u32 = LOG_RINGS + BOARD_SLOT_COUNT * LOG_RING_STRIDE;
+/// Bytes of [`SENSING_CAL`].
+pub const SENSING_CAL_BYTES: u32 = 4 * cal::WORDS;
+
 /// End of the used part of global RAM; the rest is free for later records.
-pub const LAYOUT_END: u32 = LOG_RINGS + BOARD_SLOT_COUNT * LOG_RING_STRIDE;
+pub const LAYOUT_END: u32 = SENSING_CAL + SENSING_CAL_BYTES;
 
 /// Who writes a region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -230,7 +242,7 @@ const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Re
 }
 
 /// Every region of global RAM in address order.
-pub const LAYOUT: [Region; 11] = [
+pub const LAYOUT: [Region; 15] = [
     Region {
         name: "header",
         offset: HEADER_MAGIC,
@@ -258,6 +270,13 @@ pub const LAYOUT: [Region; 11] = [
         Writer::Board(BoardId::Planner),
     ),
     seq("host_command", HOST_COMMAND, Writer::Host),
+    seq("sensing_config", SENSING_CONFIG, Writer::Host),
+    seq(
+        "sensing_drift",
+        SENSING_DRIFT,
+        Writer::Board(BoardId::Sensing),
+    ),
+    seq("sensing_raw", SENSING_RAW, Writer::Board(BoardId::Sensing)),
     Region {
         name: "work_list",
         offset: WORK_CURSOR,
@@ -284,6 +303,13 @@ pub const LAYOUT: [Region; 11] = [
         offset: LOG_RINGS,
         size: BOARD_SLOT_COUNT * LOG_RING_STRIDE,
         writer: Writer::EachBoard,
+        seqlock: false,
+    },
+    Region {
+        name: "sensing_cal",
+        offset: SENSING_CAL,
+        size: SENSING_CAL_BYTES,
+        writer: Writer::Host,
         seqlock: false,
     },
 ];
@@ -318,6 +344,9 @@ const _: () = assert!(SeqLock::<ServoState>::SIZE == 44);
 const _: () = assert!(SeqLock::<ReflexSubgoal>::SIZE == 20);
 const _: () = assert!(SeqLock::<PlannerGoal>::SIZE == 24);
 const _: () = assert!(SeqLock::<HostCommand>::SIZE == 20);
+const _: () = assert!(SeqLock::<SensingConfig>::SIZE == 20);
+const _: () = assert!(SeqLock::<SensingDrift>::SIZE == 24);
+const _: () = assert!(SeqLock::<RawTable>::SIZE == 136);
 const _: () = assert!(WORK_ENTRY_BYTES == 32);
 const _: () = assert!(CSPACE_MAP_BYTES == 0x1_0000);
 const _: () = assert!(LOG_ENTRIES_OFFSET + LOG_ENTRIES * LOG_ENTRY_BYTES <= LOG_RING_STRIDE);

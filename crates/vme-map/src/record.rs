@@ -140,6 +140,30 @@ impl<R: Record> SeqLock<R> {
         bus.write_u32(self.off, odd.wrapping_add(1));
     }
 
+    /// Publishes words `first..first + N` of the record, leaving the others as they are: for
+    /// a writer that changed only part of a large record (the sensing board changes one
+    /// beacon of the object table per strobe slot). Readers see the whole record change
+    /// atomically as with [`Self::publish`]. Words beyond the record are not written.
+    pub fn publish_words<const N: usize>(
+        &self,
+        bus: &mut dyn GlobalBus,
+        first: u32,
+        words: &[u32; N],
+    ) {
+        let seq = bus.read_u32(self.off);
+        let odd = (seq | 1).wrapping_add(if seq & 1 == 0 { 0 } else { 2 });
+        bus.write_u32(self.off, odd);
+        let base = self.off + 4 + 4 * first;
+        let mut i = 0;
+        while i < N {
+            if first + (i as u32) < R::WORDS {
+                bus.write_u32(base + 4 * i as u32, words[i]);
+            }
+            i += 1;
+        }
+        bus.write_u32(self.off, odd.wrapping_add(1));
+    }
+
     /// Writes only the first half of the record's words and leaves the sequence odd: the
     /// "torn record" fault a writer that stops mid-publish leaves behind. For fault
     /// injection in tests and the simulator.
@@ -189,6 +213,23 @@ mod tests {
             /// c
             pub c: u32,
         }
+    }
+
+    #[test]
+    fn publishing_some_words_changes_only_those_and_the_sequence() {
+        let mut mem = [0u8; 64];
+        let mut bus = ArrayBus::new(&mut mem);
+        let slot = SeqLock::<Pair>::at(8);
+        slot.publish(&mut bus, &Pair { a: 1, b: -2, c: 3 });
+        let s0 = slot.sequence(&mut bus);
+        slot.publish_words(&mut bus, 1, &[20, 30]);
+        let (p, s1) = slot.read(&mut bus).unwrap();
+        assert_eq!(p, Pair { a: 1, b: 20, c: 30 });
+        assert_eq!(s1, s0 + 2);
+        // Words past the record are dropped, not written over the next slot.
+        slot.publish_words(&mut bus, 2, &[7, 99]);
+        assert_eq!(slot.read(&mut bus).unwrap().0.c, 7);
+        assert_eq!(bus.read_u32(8 + 4 * 4), 0);
     }
 
     #[test]

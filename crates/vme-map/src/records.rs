@@ -36,6 +36,18 @@ pub mod beacon_flags {
     pub const SATURATED: u32 = 1 << 2;
     /// Drift / intensity correction was applied.
     pub const CORRECTED: u32 = 1 << 3;
+    /// No good calibration table: the position is not in task space (never valid).
+    pub const UNCALIBRATED: u32 = 1 << 4;
+    /// The position lies outside the calibrated area (extrapolated from the table).
+    pub const EXTRAPOLATED: u32 = 1 << 5;
+    /// The filter holds fewer samples than its window (just (re)acquired).
+    pub const FILLING: u32 = 1 << 6;
+    /// The object is moving: the short (thesis, 32-sample) window is in use.
+    pub const MOVING: u32 = 1 << 7;
+    /// Bits 8..16: samples in the filter behind the position (saturating at 255).
+    pub const SAMPLES_SHIFT: u32 = 8;
+    /// Mask of the sample count after shifting by [`SAMPLES_SHIFT`].
+    pub const SAMPLES_MASK: u32 = 0xFF;
 }
 
 /// Beacon assignment (thesis ch. II.3: 5 obstacles, robot tip, wand, instructional robot).
@@ -52,42 +64,200 @@ pub mod beacon_index {
 
 use crate::record::Record;
 
-/// The object position table written by the sensing board: a frame counter followed by the
-/// eight beacons. Encoded by hand because it nests [`Beacon`]s.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ObjectTable {
-    /// Number of complete strobe frames published.
-    pub frame: u32,
-    /// The beacons in strobe order.
-    pub beacons: [Beacon; BEACONS],
+/// Defines a per-beacon table: a frame counter followed by [`BEACONS`] nested records, with
+/// its [`Record`] impl (the `record!` macro handles flat records only).
+macro_rules! beacon_table {
+    ($(#[$meta:meta])* $name:ident of $item:ident, [$($field:literal),+ $(,)?]) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        pub struct $name {
+            /// Number of complete strobe frames published.
+            pub frame: u32,
+            /// The beacons in strobe order.
+            pub beacons: [$item; BEACONS],
+        }
+
+        impl Record for $name {
+            const WORDS: u32 = 1 + BEACONS as u32 * $item::WORDS;
+            const FIELDS: &'static [&'static str] = &[
+                "frame",
+                $(concat!("b0.", $field),)+ $(concat!("b1.", $field),)+
+                $(concat!("b2.", $field),)+ $(concat!("b3.", $field),)+
+                $(concat!("b4.", $field),)+ $(concat!("b5.", $field),)+
+                $(concat!("b6.", $field),)+ $(concat!("b7.", $field),)+
+            ];
+            fn encode(&self, put: &mut dyn FnMut(u32, u32)) {
+                put(0, self.frame);
+                for (b, beacon) in self.beacons.iter().enumerate() {
+                    let base = 1 + b as u32 * $item::WORDS;
+                    beacon.encode(&mut |i, w| put(base + i, w));
+                }
+            }
+            fn decode(get: &mut dyn FnMut(u32) -> u32) -> Self {
+                let mut t = $name {
+                    frame: get(0),
+                    ..Default::default()
+                };
+                for (b, beacon) in t.beacons.iter_mut().enumerate() {
+                    let base = 1 + b as u32 * $item::WORDS;
+                    *beacon = $item::decode(&mut |i| get(base + i));
+                }
+                t
+            }
+        }
+    };
 }
 
-impl Record for ObjectTable {
-    const WORDS: u32 = 1 + BEACONS as u32 * Beacon::WORDS;
-    const FIELDS: &'static [&'static str] = &[
-        "frame", "b0.x_um", "b0.y_um", "b0.t_us", "b0.flags", "b1.x_um", "b1.y_um", "b1.t_us",
-        "b1.flags", "b2.x_um", "b2.y_um", "b2.t_us", "b2.flags", "b3.x_um", "b3.y_um", "b3.t_us",
-        "b3.flags", "b4.x_um", "b4.y_um", "b4.t_us", "b4.flags", "b5.x_um", "b5.y_um", "b5.t_us",
-        "b5.flags", "b6.x_um", "b6.y_um", "b6.t_us", "b6.flags", "b7.x_um", "b7.y_um", "b7.t_us",
-        "b7.flags",
-    ];
-    fn encode(&self, put: &mut dyn FnMut(u32, u32)) {
-        put(0, self.frame);
-        for (b, beacon) in self.beacons.iter().enumerate() {
-            let base = 1 + b as u32 * Beacon::WORDS;
-            beacon.encode(&mut |i, w| put(base + i, w));
-        }
+beacon_table!(
+    /// The object position table written by the sensing board: a frame counter followed by
+    /// the eight beacons.
+    ObjectTable of Beacon, ["x_um", "y_um", "t_us", "flags"]
+);
+
+record! {
+    /// One beacon's signals before calibration (written by the sensing board): what the host's
+    /// calibration procedure records (thesis ch. II.3: "voltages x and y vs actual x and y").
+    pub struct RawBeacon {
+        /// Filtered x signal, A/D codes about mid-scale (signed), Q5 (1/32 code), after the
+        /// strobe crosstalk correction and before drift correction and the calibration table.
+        pub x_q5: i32,
+        /// Filtered y signal, as `x_q5`.
+        pub y_q5: i32,
+        /// Sum signal of the latest sample, codes above 0 V.
+        pub sum_codes: i32,
+        /// LED drive current set point used for the latest sample, mA.
+        pub level_ma: u32,
     }
-    fn decode(get: &mut dyn FnMut(u32) -> u32) -> Self {
-        let mut t = ObjectTable {
-            frame: get(0),
-            ..Default::default()
-        };
-        for (b, beacon) in t.beacons.iter_mut().enumerate() {
-            let base = 1 + b as u32 * Beacon::WORDS;
-            *beacon = Beacon::decode(&mut |i| get(base + i));
-        }
-        t
+}
+
+beacon_table!(
+    /// The raw signal table written by the sensing board beside [`ObjectTable`].
+    RawTable of RawBeacon, ["x_q5", "y_q5", "sum_codes", "level_ma"]
+);
+
+record! {
+    /// The sensing board's run-time drift estimate (written by the sensing board): the
+    /// per-axis offset and gain of the position signals against the calibration, learnt from
+    /// the robot tip's beacon at positions known from the encoders.
+    pub struct SensingDrift {
+        /// X offset, Q5 codes.
+        pub ox_q5: i32,
+        /// Y offset, Q5 codes.
+        pub oy_q5: i32,
+        /// X gain error, Q24 (0 = none).
+        pub gx_q24: i32,
+        /// Y gain error, Q24.
+        pub gy_q24: i32,
+        /// Tip observations used so far.
+        pub observations: u32,
+    }
+}
+
+record! {
+    /// How the sensing board runs (written by the host). Never published (sequence 0): the
+    /// board uses [`sensing_options::DEFAULT`] and its default sum level.
+    pub struct SensingConfig {
+        /// [`sensing_options`] bits.
+        pub options: u32,
+        /// Sum signal the LED current feedback holds every beacon at, codes above 0 V.
+        pub s_ref_codes: u32,
+        /// LED drive current when the feedback is off, mA.
+        pub level_ma: u32,
+        /// Host counter.
+        pub serial: u32,
+    }
+}
+
+/// Bits of [`SensingConfig::options`].
+pub mod sensing_options {
+    /// Drive each LED so its sum signal stays at the reference (thesis ch. II.3.5's
+    /// proposal): removes LED intensity differences.
+    pub const CURRENT_FEEDBACK: u32 = 1 << 0;
+    /// Correct thermal drift with the tip beacon as a reference at encoder-known positions.
+    pub const DRIFT_REFERENCE: u32 = 1 << 1;
+    /// Long average for resting beacons, the thesis's 32 samples for moving ones.
+    pub const ADAPTIVE_FILTER: u32 = 1 << 2;
+    /// Remove the previous beacon's residue in the 40 us analog filter.
+    pub const CROSSTALK: u32 = 1 << 3;
+    /// Everything on: the default.
+    pub const DEFAULT: u32 = CURRENT_FEEDBACK | DRIFT_REFERENCE | ADAPTIVE_FILTER | CROSSTALK;
+}
+
+/// The calibration table's format (thesis ch. II.3.3: the table of signals against true
+/// positions from the 36 x 36, 2 cm scan, inverted to true positions against signals). The
+/// host writes it at [`crate::SENSING_CAL`]; the sensing board checks it before use and again
+/// whenever its generation word changes. Words are big-endian like all of global RAM.
+///
+/// | word | content |
+/// |---|---|
+/// | 0 | [`cal::MAGIC`] |
+/// | 1 | [`cal::VERSION`] |
+/// | 2 | generation: changed by the host on every write |
+/// | 3 | [`cal::WORDS`] |
+/// | 4 | checksum: see [`cal::checksum_step`], over every word but this one |
+/// | 5 | sum level of the scan, codes (0: fixed LED current) |
+/// | 6 | [`cal::FWD_N`] |
+/// | 7, 8 | forward grid origin x, y, micrometres |
+/// | 9 | forward grid pitch, micrometres |
+/// | 10 | [`cal::INV_N`] |
+/// | 11..=14 | calibrated area x min, x max, y min, y max, micrometres |
+/// | 15 | reserved, 0 |
+/// | [`cal::FWD`].. | forward grid: `FWD_N`^2 (x_q5, y_q5) pairs, row by row (y outer) |
+/// | [`cal::INV`].. | inverse grid: `INV_N`^2 (x_um, y_um) pairs over signal codes, row by row |
+///
+/// Inverse node (i, j) is at signal codes (-2048 + 64 i, -2048 + 64 j); its positions lie
+/// within +-[`cal::MAX_NODE_UM`].
+pub mod cal {
+    /// "CAL1".
+    pub const MAGIC: u32 = 0x4341_4C31;
+    /// Format version.
+    pub const VERSION: u32 = 1;
+    /// Header words.
+    pub const HEADER: u32 = 16;
+    /// Forward grid side (36 points, 2 cm apart: the thesis's 1296-point scan).
+    pub const FWD_N: u32 = 36;
+    /// Inverse grid side: 64 cells of 64 codes over the converter's span.
+    pub const INV_N: u32 = 65;
+    /// Codes per inverse cell, as a shift of Q5 codes (64 codes = 2^11 Q5).
+    pub const INV_CELL_SHIFT_Q5: u32 = 11;
+    /// First word of the forward grid.
+    pub const FWD: u32 = HEADER;
+    /// First word of the inverse grid.
+    pub const INV: u32 = FWD + 2 * FWD_N * FWD_N;
+    /// Words in the table.
+    pub const WORDS: u32 = INV + 2 * INV_N * INV_N;
+    /// Largest inverse node coordinate (keeps the interpolation inside 32 bits).
+    pub const MAX_NODE_UM: i32 = (1 << 20) - 1;
+    /// Header word: magic.
+    pub const W_MAGIC: u32 = 0;
+    /// Header word: version.
+    pub const W_VERSION: u32 = 1;
+    /// Header word: generation.
+    pub const W_GENERATION: u32 = 2;
+    /// Header word: size in words.
+    pub const W_WORDS: u32 = 3;
+    /// Header word: checksum.
+    pub const W_CHECKSUM: u32 = 4;
+    /// Header word: sum level of the scan.
+    pub const W_S_REF: u32 = 5;
+    /// Header word: forward grid side.
+    pub const W_FWD_N: u32 = 6;
+    /// Header word: forward origin x.
+    pub const W_FWD_X0: u32 = 7;
+    /// Header word: forward origin y.
+    pub const W_FWD_Y0: u32 = 8;
+    /// Header word: forward pitch.
+    pub const W_FWD_PITCH: u32 = 9;
+    /// Header word: inverse grid side.
+    pub const W_INV_N: u32 = 10;
+    /// Header word: calibrated area, x min (then x max, y min, y max).
+    pub const W_AREA: u32 = 11;
+
+    /// One step of the table checksum: rotate left by one, then exclusive-or the word. The
+    /// checksum starts at 0 and runs over words 0..[`WORDS`] in order, skipping
+    /// [`W_CHECKSUM`]. (No multiply or divide: cheap on the 68020 and order-sensitive.)
+    pub const fn checksum_step(c: u32, w: u32) -> u32 {
+        c.rotate_left(1) ^ w
     }
 }
 
