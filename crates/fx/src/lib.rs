@@ -11,6 +11,8 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod trig;
+
 /// round((a * b) / 2^sh) saturated to `i32`; `sh` in 1..=32.
 #[inline]
 pub fn mul_shr(a: i32, b: i32, sh: u32) -> i32 {

@@ -1,0 +1,96 @@
+//! Run-time correction of thermal drift (beyond the thesis, which had to recalibrate after
+//! hours of warm-up; ch. II.3.4: offsets up to 18 mm).
+//!
+//! Drift is an offset and a gain change of each divided position signal. The robot's tip
+//! carries a beacon at a position the encoders give to a few micrometres, so whenever the
+//! arm rests, the tip's filtered signals can be compared with the signals the calibration
+//! scan recorded at that position (the forward grid). Per axis the model is
+//! `measured = expected + o + g * expected` (signals in Q5 codes about mid-scale, where the
+//! optical axis is); `o` and `g` are learnt by normalised least-mean-squares with steps
+//! 1/256 (offset) and 1/256 of the signal's full scale squared (gain), i.e. a time
+//! constant of 256 tip observations (0.5 s of rest) for the offset. Thermal drift changes
+//! over minutes, so the estimate follows it with room to spare; its own noise averages over
+//! the same 256 observations. Every beacon's signals are corrected before the inverse grid.
+//!
+//! Offset alone is observable from one resting place; the gain needs rests at different
+//! places, which a working arm provides (the bench tours a few).
+
+/// Largest offset accepted, Q5 codes (256 codes, about 50 mm): beyond it the estimate is
+/// implausible and held.
+pub const MAX_OFFSET_Q5: i32 = 256 << 5;
+/// Largest gain error accepted, Q24 (5 %).
+pub const MAX_GAIN_Q24: i32 = (1 << 24) / 20;
+
+/// The drift estimate of both axes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Drift {
+    /// Offsets, Q5 codes times 256 (the LMS accumulator).
+    pub o_q13: [i32; 2],
+    /// Gain errors, Q24.
+    pub g_q24: [i32; 2],
+    /// Observations used.
+    pub observations: u32,
+}
+
+impl Drift {
+    /// The offsets, Q5 codes.
+    pub fn offset_q5(&self) -> [i32; 2] {
+        [self.o_q13[0] >> 8, self.o_q13[1] >> 8]
+    }
+
+    /// Removes the drift from measured signals.
+    pub fn correct(&self, v_q5: [i32; 2]) -> [i32; 2] {
+        [
+            correct_axis(v_q5[0], self.o_q13[0], self.g_q24[0]),
+            correct_axis(v_q5[1], self.o_q13[1], self.g_q24[1]),
+        ]
+    }
+
+    /// Learns from one observation: the tip's measured signals and the signals the scan
+    /// recorded at its true position. Returns 1 if the estimate hit its bounds
+    /// (implausible: held at the bound), else 0 (an integer, not a `bool`: the 68k backend
+    /// clobbered the flags of a branch on it; docs/toolchain.md class 1).
+    pub fn observe(&mut self, measured_q5: [i32; 2], expected_q5: [i32; 2]) -> u32 {
+        self.observations = self.observations.saturating_add(1);
+        let a = observe_axis(
+            &mut self.o_q13[0],
+            &mut self.g_q24[0],
+            measured_q5[0],
+            expected_q5[0],
+        );
+        let b = observe_axis(
+            &mut self.o_q13[1],
+            &mut self.g_q24[1],
+            measured_q5[1],
+            expected_q5[1],
+        );
+        a | b
+    }
+}
+
+/// (v - o) / (1 + g) to second order in g (|g| <= 5 %: the third-order term is under
+/// 0.2 Q5 codes). In 32-bit products: the gain in Q16 (|g| < 2^12) times a signal (< 2^17).
+#[inline(never)]
+fn correct_axis(v: i32, o_q13: i32, g_q24: i32) -> i32 {
+    let u = v - (o_q13 >> 8);
+    let g_q16 = g_q24 >> 8;
+    let gu = (g_q16 * u) >> 16;
+    u - gu + ((g_q16 * gu) >> 16)
+}
+
+/// One axis's LMS step; 1 if a bound clipped it, else 0.
+#[inline(never)]
+fn observe_axis(o_q13: &mut i32, g_q24: &mut i32, measured: i32, expected: i32) -> u32 {
+    let r = measured - expected - (*o_q13 >> 8) - fx::mul_shr(*g_q24, expected, 24);
+    let o = *o_q13 + r;
+    // Gain step: r * e / 2^14 in Q24 = (1/256) * r * e / (2^15)^2, 2^15 the Q5 half scale.
+    let g = *g_q24 + fx::mul_shr(r, expected, 14);
+    let lim_o = MAX_OFFSET_Q5 << 8;
+    let oc = o.clamp(-lim_o, lim_o);
+    let gc = g.clamp(-MAX_GAIN_Q24, MAX_GAIN_Q24);
+    *o_q13 = oc;
+    *g_q24 = gc;
+    // Non-zero differences to 1 by sign arithmetic.
+    let d = (oc ^ o) | (gc ^ g);
+    ((d | d.wrapping_neg()) as u32) >> 31
+}

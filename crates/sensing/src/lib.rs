@@ -1,0 +1,629 @@
+//! The sensing board's logic (thesis ch. II section 3, lines ~404-470): the strobe of the
+//! eight LED beacons, 250 us each, one A/D conversion of the x, y and sum signals at the end
+//! of each pulse, and from the samples the table of object positions in global RAM.
+//!
+//! Per strobe slot the board calls [`Sensing::slot`] when the 2 MHz timer says a slot has
+//! passed (it reads the finished conversion, starts the next one on the beacon lit during
+//! the slot, and lights the next beacon at the level [`Slot::level_ma`] gives), then
+//! [`Sensing::step`] with the sample. `step`:
+//!
+//! 1. validity from the sum signal (below [`OCCLUDED_BELOW_CODES`]: occluded) and the
+//!    converters' over-range bits (saturated); an invalid sample empties the beacon's filter
+//!    and the beacon is published invalid at once (within one strobe frame);
+//! 2. removes the previous beacon's residue from the 40 us analog filter (the sample is
+//!    taken 6.25 time constants after the switch: 0.2 % of the step is left);
+//! 3. LED current feedback (the thesis's proposed fix, ch. II.3.5): each beacon's drive is
+//!    adjusted so its sum signal stays at the reference level the table was made at, so
+//!    every LED, whatever its efficiency, driver or place, conforms to the one table;
+//! 4. the adaptive running average ([`filter`]);
+//! 5. drift correction learnt from the robot's tip ([`drift`]), then the calibration
+//!    table's inverse grid ([`cal`]) to micrometres;
+//! 6. the beacon's record: position, strobe time, validity and quality flags.
+//!
+//! Nothing here touches hardware: the board wires the registers and global RAM to it.
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+
+pub mod cal;
+pub mod drift;
+pub mod filter;
+#[cfg(test)]
+mod tests;
+
+use cal::{CalWords, Checker, Reason};
+use drift::Drift;
+use filter::Filter;
+use vme_map::records::{
+    beacon_flags as bf, beacon_index, sensing_options as opt, Beacon, ObjectTable, RawBeacon,
+    RawTable, SensingConfig, BEACONS,
+};
+
+/// Default sum level the LED current feedback holds, codes above 0 V (4.0 V: reachable at
+/// the driver's 1000 mA by a weak LED in a corner of the field).
+pub const DEFAULT_S_REF_CODES: i32 = 819;
+/// A sum signal below this many codes (1.0 V) means no beacon light: occluded.
+pub const OCCLUDED_BELOW_CODES: i32 = 205;
+/// Least and most LED drive current the feedback sets, mA.
+pub const LEVEL_MIN_MA: i32 = 50;
+/// See [`LEVEL_MIN_MA`] (the driver's maximum).
+pub const LEVEL_MAX_MA: i32 = regs::sensing::LED_LEVEL_MAX_MA as i32;
+/// Slots start on a fixed grid of [`SLOT_TICKS`]: a pass that finds the next grid point less
+/// than this many ticks ahead starts the slot (the timer reads of successive 250 us passes
+/// differ by a tick either way). A late slot leaves the next one shorter, so the frame
+/// rate holds while the average slot fits; a slot later than a whole slot resets the grid.
+pub const SLOT_EARLY_TICKS: u16 = 10;
+/// Tip beacon: the arm counts as resting while both joint angles stay within this of where
+/// they were when the rest began (0.5 mrad: a quarter of a millimetre at the tip). Angles,
+/// not the observer's velocities, which jitter by several mrad/s at rest.
+pub const REST_URAD: i32 = 500;
+/// Tip samples the arm must have rested for before the tip's filtered position is used as a
+/// drift reference: the long window and a margin.
+pub const REST_SAMPLES: u16 = filter::LONG as u16 + 8;
+/// Tip samples without a new servo loop count after which the servo state is stale.
+pub const SERVO_STALE_SAMPLES: u16 = 4;
+/// Positions this far outside the calibrated area are flagged extrapolated, micrometres.
+pub const AREA_MARGIN_UM: i32 = 5_000;
+
+const _: () = assert!(regs::sensing::FILTER_TAU_US == 40 && regs::sensing::TIMER_HZ == 2_000_000);
+/// a / (1 - a) in Q16 with a = exp(-T / 40 us) the analog filter's residue after T ticks of
+/// 0.5 us, for T = 304 + 16 k (a slot after a late one is lit for less than 250 us).
+const CROSSTALK_Q16: [i32; 32] = [
+    1500, 1223, 998, 815, 665, 544, 445, 364, 297, 243, 199, 163, 133, 109, 89, 73, 60, 49, 40, 33,
+    27, 22, 18, 15, 12, 10, 8, 7, 5, 4, 4, 3,
+];
+/// Timer ticks of one slot (250 us at 2 MHz).
+pub const SLOT_TICKS: u16 = 500;
+
+/// One conversion as the board read it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AdcSample {
+    /// X code, offset binary 0..=4095.
+    pub x: u16,
+    /// Y code.
+    pub y: u16,
+    /// Sum code.
+    pub sum: u16,
+    /// Any converter input was beyond its range.
+    pub over: bool,
+}
+
+/// The servo state as the sensing board needs it (for the tip's true position).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ServoView {
+    /// Absolute joint angles.
+    pub theta_urad: [i32; 2],
+    /// Joint velocities.
+    pub omega_urad_s: [i32; 2],
+    /// The servo's loop counter (advances while the servo runs).
+    pub loops: u32,
+}
+
+/// How to run, from the host's [`SensingConfig`] record.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// `sensing_options` bits.
+    pub options: u32,
+    /// Sum level for the current feedback, codes.
+    pub s_ref_codes: i32,
+    /// Fixed drive when the feedback is off, mA.
+    pub level_ma: i32,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            options: opt::DEFAULT,
+            s_ref_codes: DEFAULT_S_REF_CODES,
+            level_ma: regs::sensing::LED_LEVEL_RESET_MA as i32,
+        }
+    }
+}
+
+impl Config {
+    /// The configuration a host record asks for (implausible values replaced by defaults).
+    pub fn from_record(r: &SensingConfig) -> Self {
+        let d = Self::default();
+        let s = r.s_ref_codes as i32;
+        let l = r.level_ma as i32;
+        Self {
+            options: r.options,
+            s_ref_codes: if (OCCLUDED_BELOW_CODES * 2..2048).contains(&s) {
+                s
+            } else {
+                d.s_ref_codes
+            },
+            level_ma: if (LEVEL_MIN_MA..=LEVEL_MAX_MA).contains(&l) {
+                l
+            } else {
+                d.level_ma
+            },
+        }
+    }
+    fn has(&self, bit: u32) -> bool {
+        self.options & bit != 0
+    }
+}
+
+/// What the board does at a slot boundary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slot {
+    /// Start a conversion (a beacon has been lit for the whole slot).
+    pub start: bool,
+    /// Light this beacon next.
+    pub next: u8,
+    /// At this drive current, mA.
+    pub level_ma: u16,
+    /// The beacon whose finished conversion `step` will process, if any: the board reads the
+    /// servo state for the tip and the host's configuration for beacon 0.
+    pub processing: Option<u8>,
+}
+
+/// Something the board records as a fault ([`Output::event`] carries it as
+/// [`Event::code`]: plain integers, merged without branches; see `merge`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Event {
+    /// A converter input saturated on this beacon.
+    Saturated(u8),
+    /// The calibration table was refused.
+    BadCalibration(Reason),
+    /// The servo state stopped advancing: the drift reference is held.
+    StaleServo,
+    /// The drift estimate reached its bounds: implausible, held.
+    DriftBound,
+}
+
+impl Event {
+    /// The event as a word: kind in bits 0..8 (1..=4), detail in bits 8..16.
+    pub const fn code(self) -> u32 {
+        match self {
+            Event::Saturated(b) => 1 | (b as u32) << 8,
+            Event::BadCalibration(r) => 2 | (r as u32) << 8,
+            Event::StaleServo => 3,
+            Event::DriftBound => 4,
+        }
+    }
+    /// The event a word encodes (0: none).
+    pub const fn from_code(c: u32) -> Option<Self> {
+        let d = (c >> 8) as u8;
+        match c & 0xFF {
+            1 => Some(Event::Saturated(d)),
+            2 => Some(Event::BadCalibration(match d {
+                0 => Reason::Missing,
+                1 => Reason::Format,
+                2 => Reason::Pitch,
+                3 => Reason::Node,
+                _ => Reason::Checksum,
+            })),
+            3 => Some(Event::StaleServo),
+            4 => Some(Event::DriftBound),
+            _ => None,
+        }
+    }
+}
+
+/// `new` if it is an event (non-zero), else `old`: by masks, no compare (the M68k backend
+/// clobbered the condition codes of `if ev.is_some()` here; docs/toolchain.md class 1).
+#[inline(never)]
+fn merge(old: u32, new: u32) -> u32 {
+    let mask = ((new | new.wrapping_neg()) as i32 >> 31) as u32;
+    (new & mask) | (old & !mask)
+}
+
+/// Inputs of one step.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Input {
+    /// The conversion read at this slot boundary, if one had finished.
+    pub sample: Option<AdcSample>,
+    /// The servo state (read when the tip is processed), if readable.
+    pub servo: Option<ServoView>,
+    /// The host's configuration, if it has published one (read when beacon 0 is processed).
+    pub config: Option<Config>,
+}
+
+/// What one step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Output {
+    /// The beacon whose record changed.
+    pub beacon: Option<u8>,
+    /// A fault to record: an [`Event::code`], 0 for none.
+    pub event: u32,
+}
+
+impl Output {
+    /// The fault to record, if any.
+    pub fn event(&self) -> Option<Event> {
+        Event::from_code(self.event)
+    }
+}
+
+/// A conversion in flight: beacon, strobe time (us), ticks it was lit for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Conversion {
+    beacon: u8,
+    t_us: u32,
+    lit_ticks: u16,
+}
+
+/// The sensing board's state.
+pub struct Sensing {
+    started: bool,
+    last_timer: u16,
+    slot_timer: u16,
+    half_tick: u32,
+    now_us: u32,
+    lit: Option<u8>,
+    converting: Option<Conversion>,
+    sampled: Option<Conversion>,
+    /// The last processed sample's raw codes and beacon (for the crosstalk correction).
+    prev: Option<(u8, [i32; 2])>,
+    levels: [u16; BEACONS],
+    /// 2^16 / the configuration's sum reference, for the feedback without a division.
+    s_ref_recip_q16: i32,
+    filters: [Filter; BEACONS],
+    config: Config,
+    /// The calibration table check.
+    pub checker: Checker,
+    /// The drift estimate.
+    pub drift: Drift,
+    rest: u16,
+    rest_theta: [i32; 2],
+    servo_loops: u32,
+    servo_same: u16,
+    servo_stale: bool,
+    /// The object table to publish.
+    pub objects: ObjectTable,
+    /// The raw signal table to publish.
+    pub raw: RawTable,
+}
+
+impl Default for Sensing {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Sensing {
+    /// A board just booted: nothing lit, no table, filters empty.
+    pub const fn new() -> Self {
+        Self {
+            started: false,
+            last_timer: 0,
+            slot_timer: 0,
+            half_tick: 0,
+            now_us: 0,
+            lit: None,
+            converting: None,
+            sampled: None,
+            prev: None,
+            levels: [regs::sensing::LED_LEVEL_RESET_MA; BEACONS],
+            s_ref_recip_q16: (1 << 16) / DEFAULT_S_REF_CODES,
+            filters: [Filter::new(); BEACONS],
+            config: Config {
+                options: opt::DEFAULT,
+                s_ref_codes: DEFAULT_S_REF_CODES,
+                level_ma: regs::sensing::LED_LEVEL_RESET_MA as i32,
+            },
+            checker: Checker::new(),
+            drift: Drift {
+                o_q13: [0; 2],
+                g_q24: [0; 2],
+                observations: 0,
+            },
+            rest: 0,
+            rest_theta: [0; 2],
+            servo_loops: 0,
+            servo_same: 0,
+            servo_stale: false,
+            objects: ObjectTable {
+                frame: 0,
+                beacons: [Beacon {
+                    x_um: 0,
+                    y_um: 0,
+                    t_us: 0,
+                    flags: bf::UNCALIBRATED,
+                }; BEACONS],
+            },
+            raw: RawTable {
+                frame: 0,
+                beacons: [RawBeacon {
+                    x_q5: 0,
+                    y_q5: 0,
+                    sum_codes: 0,
+                    level_ma: 0,
+                }; BEACONS],
+            },
+        }
+    }
+
+    /// Microseconds since the first slot, from the 2 MHz timer (wraps after 71 minutes).
+    pub fn now_us(&self) -> u32 {
+        self.now_us
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> Config {
+        self.config
+    }
+
+    /// At timer value `timer`: if a slot is due, what to do now (see [`SLOT_EARLY_TICKS`]).
+    pub fn slot(&mut self, timer: u16) -> Option<Slot> {
+        let due = self.slot_timer.wrapping_add(SLOT_TICKS);
+        let ahead = due.wrapping_sub(timer);
+        // `ahead` in (EARLY, 32768): the grid point is still ahead; beyond: it has passed.
+        // One unsigned compare, masked by `started` (the compare chain this replaces drew a
+        // condition-code clobber on the 68k; docs/toolchain.md class 1).
+        let waiting =
+            (ahead.wrapping_sub(SLOT_EARLY_TICKS + 1) < 0x8000 - SLOT_EARLY_TICKS - 1) as u16;
+        if waiting & (self.started as u16) != 0 {
+            return None;
+        }
+        let lit_ticks = timer.wrapping_sub(self.last_timer);
+        if self.started {
+            let ticks = lit_ticks as u32 + self.half_tick;
+            self.now_us = self.now_us.wrapping_add(ticks >> 1);
+            self.half_tick = ticks & 1;
+        }
+        self.slot_timer = next_grid(due, timer, self.started);
+        self.started = true;
+        self.last_timer = timer;
+        // The conversion started at the last boundary has finished: it is processed now.
+        self.sampled = self.converting;
+        self.converting = self.lit.map(|b| Conversion {
+            beacon: b,
+            t_us: self.now_us,
+            lit_ticks,
+        });
+        let next = self.lit.map_or(0, |b| (b + 1) & 7);
+        self.lit = Some(next);
+        Some(Slot {
+            start: self.converting.is_some(),
+            next,
+            level_ma: self.levels[next as usize],
+            processing: self.sampled.map(|c| c.beacon),
+        })
+    }
+
+    /// Processes the sample read at this slot boundary; updates [`Self::objects`] and
+    /// [`Self::raw`]. `cal` reads the calibration table.
+    pub fn step(&mut self, input: &Input, cal: &mut impl CalWords) -> Output {
+        let mut out = Output::default();
+        if let Some(r) = self.checker.step(cal) {
+            out.event = Event::BadCalibration(r).code();
+        }
+        if let Some(c) = input.config {
+            if c.s_ref_codes != self.config.s_ref_codes {
+                self.s_ref_recip_q16 = fx::div(1 << 16, c.s_ref_codes);
+            }
+            self.config = c;
+        }
+        let (Some(conv), Some(s)) = (self.sampled.take(), input.sample) else {
+            return out;
+        };
+        let ev = self.process(conv, s, input.servo, cal);
+        out.beacon = Some(conv.beacon);
+        out.event = merge(out.event, ev);
+        out
+    }
+
+    fn process(
+        &mut self,
+        conv: Conversion,
+        s: AdcSample,
+        servo: Option<ServoView>,
+        cal: &mut impl CalWords,
+    ) -> u32 {
+        let b = conv.beacon as usize & 7;
+        let raw = [s.x as i32 - 2048, s.y as i32 - 2048];
+        let sum = s.sum as i32 - 2048;
+        let prev = self.prev.replace((conv.beacon, raw));
+        let mut event = 0;
+        let mut flags = 0;
+        let cfg = self.config;
+        if sum < OCCLUDED_BELOW_CODES {
+            self.filters[b].reset();
+            flags |= bf::OCCLUDED;
+            // Start again from the nominal drive when the beacon reappears (a level the
+            // feedback had lowered could otherwise keep it below the threshold).
+            self.levels[b] = regs::sensing::LED_LEVEL_RESET_MA;
+        } else if s.over {
+            self.filters[b].reset();
+            flags |= bf::SATURATED;
+            // Too bright, or a faulty input: drive less (the feedback brings it back).
+            self.levels[b] = (self.levels[b] as i32 >> 1).max(LEVEL_MIN_MA) as u16;
+            event = Event::Saturated(conv.beacon).code();
+        } else {
+            let mut q2 = [raw[0] << 2, raw[1] << 2];
+            if let (true, Some((pb, pv))) = (cfg.has(opt::CROSSTALK), prev) {
+                if (pb + 1) & 7 == conv.beacon {
+                    crosstalk_q2(&mut q2, &raw, &pv, conv.lit_ticks);
+                }
+            }
+            self.filters[b].push(q2, cfg.has(opt::ADAPTIVE_FILTER));
+            self.levels[b] = if cfg.has(opt::CURRENT_FEEDBACK) {
+                feedback_ma(
+                    self.levels[b] as i32,
+                    sum,
+                    cfg.s_ref_codes,
+                    self.s_ref_recip_q16,
+                ) as u16
+            } else {
+                cfg.level_ma as u16
+            };
+        }
+        let est = if flags == 0 {
+            self.filters[b].estimate(cfg.has(opt::ADAPTIVE_FILTER))
+        } else {
+            None
+        };
+        let rb = &mut self.raw.beacons[b];
+        rb.sum_codes = sum;
+        rb.level_ma = self.levels[b] as u32;
+        if let Some(e) = est {
+            rb.x_q5 = e.q5[0];
+            rb.y_q5 = e.q5[1];
+        }
+        let header = self.checker.header();
+        let beacon = &mut self.objects.beacons[b];
+        beacon.t_us = conv.t_us;
+        match (est, header) {
+            (Some(e), Some(h)) => {
+                let mut v = e.q5;
+                if cfg.has(opt::DRIFT_REFERENCE) && self.drift.observations > 0 {
+                    v = self.drift.correct(v);
+                    flags |= bf::CORRECTED;
+                }
+                let p = cal::position_um(cal, v);
+                beacon.x_um = p[0];
+                beacon.y_um = p[1];
+                flags |= bf::VALID;
+                if outside(p, &h.area_um) {
+                    flags |= bf::EXTRAPOLATED;
+                }
+                if e.moving {
+                    flags |= bf::MOVING;
+                }
+                if e.filling {
+                    flags |= bf::FILLING;
+                }
+                flags |= (e.samples as u32) << bf::SAMPLES_SHIFT;
+            }
+            (None, h) => {
+                if flags == 0 {
+                    flags |= bf::FILLING | (self.filters[b].count() as u32) << bf::SAMPLES_SHIFT;
+                }
+                if h.is_none() {
+                    flags |= bf::UNCALIBRATED;
+                }
+            }
+            (Some(e), None) => {
+                flags |= bf::UNCALIBRATED | (e.samples as u32) << bf::SAMPLES_SHIFT;
+            }
+        }
+        beacon.flags = flags;
+        if b == beacon_index::TIP {
+            event = merge(self.reference(est, servo, cal), event);
+        }
+        if b == BEACONS - 1 {
+            self.objects.frame = self.objects.frame.wrapping_add(1);
+            self.raw.frame = self.objects.frame;
+        }
+        event
+    }
+
+    /// The tip as the drift reference: learns from it while the arm rests.
+    fn reference(
+        &mut self,
+        est: Option<filter::Estimate>,
+        servo: Option<ServoView>,
+        cal: &mut impl CalWords,
+    ) -> u32 {
+        let mut event = 0;
+        let fresh = match servo {
+            Some(v) if v.loops != self.servo_loops => {
+                self.servo_loops = v.loops;
+                self.servo_same = 0;
+                true
+            }
+            _ => {
+                self.servo_same = self.servo_same.saturating_add(1);
+                self.servo_same < SERVO_STALE_SAMPLES
+            }
+        };
+        if !fresh {
+            if !self.servo_stale && self.servo_loops != 0 {
+                event = Event::StaleServo.code();
+            }
+            self.servo_stale = true;
+            self.rest = 0;
+            return event;
+        }
+        self.servo_stale = false;
+        let (Some(v), Some(e)) = (servo, est) else {
+            self.rest = 0;
+            return 0;
+        };
+        let d = [
+            v.theta_urad[0] - self.rest_theta[0],
+            v.theta_urad[1] - self.rest_theta[1],
+        ];
+        if d[0].abs() < REST_URAD && d[1].abs() < REST_URAD {
+            self.rest = self.rest.saturating_add(1);
+        } else {
+            self.rest = 0;
+            self.rest_theta = v.theta_urad;
+        }
+        if self.rest < REST_SAMPLES
+            || (e.samples as usize) < filter::LONG.min(255)
+            || !self.config.has(opt::DRIFT_REFERENCE)
+        {
+            return 0;
+        }
+        let Some(h) = self.checker.header() else {
+            return 0;
+        };
+        let Some(expected) = cal::signals_q5(cal, &h, tip_um(v.theta_urad)) else {
+            return 0;
+        };
+        // 0 when the estimate stayed inside its bounds, else the event: a shift, no branch.
+        const _: () = assert!(Event::DriftBound.code() == 1 << 2);
+        self.drift.observe(e.q5, expected) << 2
+    }
+}
+
+/// Where this slot sits on the grid: `due` if it is less than a whole slot late (and the
+/// grid has started), else `timer` (the grid restarts). By masks: the select this was
+/// compiled to clobbered its compare's flags on the 68k (docs/toolchain.md class 1).
+#[inline(always)]
+fn next_grid(due: u16, timer: u16, started: bool) -> u16 {
+    let late = timer.wrapping_sub(due) as i32;
+    let on = ((late - SLOT_TICKS as i32) >> 31) & (started as i32).wrapping_neg();
+    ((due as i32 & on) | (timer as i32 & !on)) as u16
+}
+
+/// Whether `p` lies outside the calibrated area (with [`AREA_MARGIN_UM`]).
+#[inline(never)]
+fn outside(p: [i32; 2], area: &[i32; 4]) -> bool {
+    p[0] < area[0] - AREA_MARGIN_UM
+        || p[0] > area[1] + AREA_MARGIN_UM
+        || p[1] < area[2] - AREA_MARGIN_UM
+        || p[1] > area[3] + AREA_MARGIN_UM
+}
+
+/// Removes the previous beacon's residue in the analog filters from a sample (`q2`, Q2
+/// codes; `raw` its codes, `prev` the previous beacon's): v + (v - v_prev) a / (1 - a), for
+/// a sample lit `lit_ticks` after the switch. Writes through a reference (no struct return:
+/// docs/toolchain.md class 7).
+#[inline(never)]
+fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u16) {
+    let k = ((lit_ticks as i32 - 304 + 8) >> 4).clamp(0, CROSSTALK_Q16.len() as i32 - 1);
+    let f = CROSSTALK_Q16[k as usize];
+    q2[0] += ((raw[0] - prev[0]) * f) >> 14;
+    q2[1] += ((raw[1] - prev[1]) * f) >> 14;
+}
+
+/// The next drive current: Newton's step towards the sum level `s_ref` (the sum is
+/// proportional to the current), clamped to the driver's range. `recip_q16` is 2^16 /
+/// `s_ref` (the products stay within 32 bits: |s_ref - sum| < 2^11, recip < 2^8,
+/// level < 2^10).
+#[inline(never)]
+fn feedback_ma(level: i32, sum: i32, s_ref: i32, recip_q16: i32) -> i32 {
+    let f_q16 = (s_ref - sum) * recip_q16;
+    (level + ((f_q16 * level) >> 16)).clamp(LEVEL_MIN_MA, LEVEL_MAX_MA)
+}
+
+/// Link lengths in micrometres, from the arm's geometry (the one source).
+const L_UM: [i32; 2] = [
+    (arm::geometry::L1_M * 1e6 + 0.5) as i32,
+    (arm::geometry::L2_M * 1e6 + 0.5) as i32,
+];
+
+/// The tip beacon's task-space position (micrometres) at absolute joint angles `theta`
+/// (thesis ch. II: link angles are absolute).
+pub fn tip_um(theta_urad: [i32; 2]) -> [i32; 2] {
+    let (s1, c1) = fx::trig::sin_cos_q30(theta_urad[0]);
+    let (s2, c2) = fx::trig::sin_cos_q30(theta_urad[1]);
+    [
+        fx::mul_shr(L_UM[0], c1, 30) + fx::mul_shr(L_UM[1], c2, 30),
+        fx::mul_shr(L_UM[0], s1, 30) + fx::mul_shr(L_UM[1], s2, 30),
+    ]
+}
