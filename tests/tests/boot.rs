@@ -10,7 +10,8 @@ use vme_map::{BoardId, BoardState, FaultCode};
 #[test]
 fn all_five_images_boot_and_their_heartbeats_advance() {
     let mut sys = System::power_up(&images_dir(), &FIVE).unwrap();
-    sys.run_ms(2.0);
+    // The sensing board's runtime copies 9 KiB of initial filter state first (3.2 ms).
+    sys.run_ms(5.0);
     let first: Vec<u32> = FIVE.iter().map(|&b| sys.heartbeat(b)).collect();
     sys.run_ms(2.0);
     for (i, &b) in FIVE.iter().enumerate() {

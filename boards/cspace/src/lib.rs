@@ -20,7 +20,12 @@ pub struct Board {
     shell: Shell,
     last: Outcome,
     fault: Option<FaultCode>,
+    /// Passes in a row that found the object table torn.
+    torn: u8,
 }
+
+/// Passes in a row the object table may read torn before that is a fault.
+pub const TORN_PASSES: u8 = 3;
 
 impl Board {
     /// The board's identity from its board-ID switch (0..=2 selects the C-space slot).
@@ -44,6 +49,7 @@ impl Board {
                 error: None,
             },
             fault: None,
+            torn: 0,
         }
     }
 
@@ -83,8 +89,25 @@ impl Board {
                     (None, at)
                 }
             }
-            Err(_) => (Some(FaultCode::TornRecord), vme_map::OBJECTS.offset()),
+            // The sensing board republishes the table every 250 us: a read that meets it
+            // mid-write on every retry is skipped; only a table torn for TORN_PASSES
+            // passes in a row (a writer that died mid-write) is a fault.
+            Err(_) => {
+                self.torn = self.torn.saturating_add(1);
+                if self.torn < TORN_PASSES {
+                    let state = if self.fault.is_some() {
+                        BoardState::Degraded
+                    } else {
+                        BoardState::Running
+                    };
+                    return self.shell.end(g, state);
+                }
+                (Some(FaultCode::TornRecord), vme_map::OBJECTS.offset())
+            }
         };
+        if fault != Some(FaultCode::TornRecord) {
+            self.torn = 0;
+        }
         // A fault is recorded when it starts (or changes), not on every pass it lasts.
         if fault.is_some() && fault != self.fault {
             if let Some(code) = fault {

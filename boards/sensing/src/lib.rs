@@ -1,18 +1,45 @@
-//! The sensing board: the I/O shell that wires its private registers and global RAM to its
-//! logic (thesis ch. II section 3 (optical sensing); design.md section 3). The logic's `step` arrives with issue 6;
-//! until then the board boots, checks the global RAM header and publishes its heartbeat and
-//! status. The same code runs in the image (`src/main.rs`, volatile MMIO) and in the
-//! simulator's native mode (device models behind [`IoBus`]).
+//! The sensing board: wires the LED strobe driver, the A/D converters, the 2 MHz timer and
+//! global RAM to the logic of `crates/sensing` (thesis ch. II section 3, optical sensing;
+//! design.md section 3). The same code runs in the image (`src/main.rs`, volatile MMIO) and
+//! in the simulator's native mode (device models behind [`IoBus`]).
+//!
+//! One pass per 250 us strobe slot (paced by the timer): read the finished conversion,
+//! start the next on the beacon lit during the slot, light the next beacon, then process
+//! the sample and publish the object table, the raw signal table and the drift estimate
+//! under their sequence locks. Faults (a saturated converter input, a refused calibration
+//! table, a stale servo state, an implausible drift estimate) are recorded when they start;
+//! the board is `Degraded` while one lasts and publishes the affected beacons invalid.
 #![no_std]
 #![deny(missing_docs)]
 
 use board_shell::Shell;
+use regs::sensing::{AdcStatus, SensingIo};
 use regs::IoBus;
-use vme_map::{BoardId, BoardState, GlobalBus};
+use sensing::cal::{CalWords, State};
+use sensing::{AdcSample, Config, Event, Input, Sensing, ServoView};
+use vme_map::records::beacon_index;
+use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
+
+/// The calibration table in global RAM (at `vme_map::SENSING_CAL`).
+pub struct GlobalCal<'a, G: GlobalBus>(pub &'a mut G);
+
+impl<G: GlobalBus> CalWords for GlobalCal<'_, G> {
+    #[inline(always)]
+    fn word(&mut self, i: u32) -> u32 {
+        self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
+    }
+}
 
 /// The sensing board's state between main-loop passes.
 pub struct Board {
     shell: Shell,
+    /// The logic.
+    pub sensing: Sensing,
+    /// The fault seen in the current strobe frame, if any.
+    fault: Option<FaultCode>,
+    /// Whether a fault was seen in the current frame.
+    fault_this_frame: bool,
+    heartbeat: u32,
 }
 
 impl Default for Board {
@@ -26,6 +53,10 @@ impl Board {
     pub const fn new() -> Self {
         Self {
             shell: Shell::new(BoardId::Sensing),
+            sensing: Sensing::new(),
+            fault: None,
+            fault_this_frame: false,
+            heartbeat: 0,
         }
     }
 
@@ -40,14 +71,124 @@ impl Board {
         self.shell.boot(g, || {});
     }
 
-    /// One pass of the main loop. Returns the new heartbeat.
-    pub fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) -> u32 {
-        self.shell.begin(g, io);
-        self.shell.end(g, BoardState::Running)
+    /// One pass of the main loop: nothing until the timer says a strobe slot has passed,
+    /// then the slot's work. Returns the heartbeat (one beat per slot).
+    pub fn poll<G: GlobalBus>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
+        let mut hw = SensingIo::new(&mut *io);
+        let Some(slot) = self.sensing.slot(hw.timer()) else {
+            return self.heartbeat;
+        };
+        // The finished conversion first: a new start clears the status bits.
+        let status = hw.status();
+        let sample = hw.sample().map(|s| AdcSample {
+            x: s.x,
+            y: s.y,
+            sum: s.sum,
+            over: status.intersects(AdcStatus::OVER_X | AdcStatus::OVER_Y | AdcStatus::OVER_SUM),
+        });
+        if slot.start {
+            hw.start_conversion();
+        }
+        hw.set_level_ma(slot.level_ma);
+        hw.strobe(slot.next as u16, true);
+        // Host commands once per strobe frame (2 ms): they cost a tenth of a slot.
+        if slot.next == 0 {
+            self.shell.begin(g, io);
+        }
+        let servo = if slot.processing == Some(beacon_index::TIP as u8) {
+            match vme_map::SERVO_STATE.read(g) {
+                Ok((s, seq)) if seq != 0 => Some(ServoView {
+                    theta_urad: [s.theta1_urad, s.theta2_urad],
+                    omega_urad_s: [s.omega1_urad_s, s.omega2_urad_s],
+                    loops: s.loops,
+                }),
+                _ => None,
+            }
+        } else {
+            None
+        };
+        let config = if slot.processing == Some(0) {
+            match vme_map::SENSING_CONFIG.read(g) {
+                Ok((c, seq)) if seq != 0 => Some(Config::from_record(&c)),
+                Ok(_) => Some(Config::default()),
+                Err(_) => None,
+            }
+        } else {
+            None
+        };
+        let out = self.sensing.step(
+            &Input {
+                sample,
+                servo,
+                config,
+            },
+            &mut GlobalCal(g),
+        );
+        if let Some(b) = out.beacon {
+            // Only the processed beacon's words change (and the frame after beacon 7).
+            let i = b as usize & 7;
+            let o = self.sensing.objects.beacons[i];
+            let base = 1 + 4 * i as u32;
+            vme_map::OBJECTS.publish_words(
+                g,
+                base,
+                &[o.x_um as u32, o.y_um as u32, o.t_us, o.flags],
+            );
+            let r = self.sensing.raw.beacons[i];
+            vme_map::SENSING_RAW.publish_words(
+                g,
+                base,
+                &[r.x_q5 as u32, r.y_q5 as u32, r.sum_codes as u32, r.level_ma],
+            );
+            if i == 7 {
+                vme_map::OBJECTS.publish_words(g, 0, &[self.sensing.objects.frame]);
+                vme_map::SENSING_RAW.publish_words(g, 0, &[self.sensing.raw.frame]);
+            }
+            if i == beacon_index::TIP {
+                let d = &self.sensing.drift;
+                let o = d.offset_q5();
+                let rec = vme_map::records::SensingDrift {
+                    ox_q5: o[0],
+                    oy_q5: o[1],
+                    gx_q24: d.g_q24[0],
+                    gy_q24: d.g_q24[1],
+                    observations: d.observations,
+                };
+                vme_map::SENSING_DRIFT.publish(g, &rec);
+            }
+        }
+        if let Some(ev) = out.event() {
+            let (code, detail) = match ev {
+                Event::Saturated(b) => (FaultCode::AdcSaturated, b as u32),
+                Event::BadCalibration(r) => (FaultCode::BadCalibration, r as u32),
+                Event::StaleServo => (FaultCode::StaleHeartbeat, vme_map::SERVO_STATE.offset()),
+                Event::DriftBound => (FaultCode::OutOfRange, vme_map::SENSING_DRIFT.offset()),
+            };
+            // A fault is recorded when it starts (or changes), not on every slot it lasts.
+            if self.fault != Some(code) {
+                self.shell.life().degraded(g, code, detail);
+            }
+            self.fault = Some(code);
+            self.fault_this_frame = true;
+        }
+        if out.beacon == Some(7) {
+            if !self.fault_this_frame {
+                self.fault = None;
+            }
+            self.fault_this_frame = false;
+        }
+        let bad_table = matches!(self.sensing.checker.state, State::Bad(_));
+        let state = if self.fault.is_some() || bad_table {
+            BoardState::Degraded
+        } else {
+            BoardState::Running
+        };
+        self.heartbeat = self.shell.end(g, state);
+        self.heartbeat
     }
 }
 
 /// The board's safe state: all LEDs off. Also the image's safe-stop hook after a fault.
 pub fn safe(io: &mut impl IoBus) {
-    regs::sensing::SensingIo::new(io).safe();
+    SensingIo::new(io).safe();
 }
