@@ -55,11 +55,16 @@ pub struct System {
 }
 
 impl System {
-    /// Loads `<dir>/<image>.elf` for each board, writes the global RAM header and resets
-    /// every board.
+    /// Loads `<dir>/<image>.elf` for each board, writes the global RAM header and the
+    /// sensing calibration table, and resets every board.
     pub fn power_up(dir: &Path, boards: &[BoardId]) -> Result<System, ImageError> {
         let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
         vme_map::init_header(&mut ArrayBus::new(&mut global));
+        // The host downloads the sensing board's calibration table, as at every power-up
+        // (here the optical model's; `sim-host bench sensing` runs the scan).
+        let camera = crate::optics::Camera::new(crate::optics::OpticsConfig::default(), 1);
+        let table = crate::sensing_cal::model_table(&camera);
+        crate::sensing_cal::write_table(&mut ArrayBus::new(&mut global), &table, 1);
         let mut out = Vec::new();
         for &b in boards {
             let image = Image::load(&dir.join(format!("{}.elf", image_name(b))))?;
@@ -219,7 +224,8 @@ pub struct Profile {
     pub functions: Vec<(String, u64)>,
 }
 
-/// Boots `board` alone, waits for its first heartbeat, then executes `ms` milliseconds of
+/// Boots `board` alone (the sensing board with eight beacons in view, run 0.6 s first to
+/// finish its table check), waits for its first heartbeat, then executes `ms` milliseconds of
 /// emulated time one instruction at a time, charging each instruction's cycles to the
 /// function (nearest symbol at or below the PC) it belongs to.
 pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageError> {
@@ -232,6 +238,11 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
         .collect();
     syms.sort();
     let mut sys = System::power_up(dir, &[board])?;
+    if board == BoardId::Sensing {
+        // Eight beacons in view, and past the calibration table's check: the steady state.
+        sys.boards[0].io = crate::sensing_bench::lit_camera(1);
+        sys.run_ms(600.0);
+    }
     sys.run_to_first_heartbeat(0);
     let hb0 = sys.heartbeat(board);
     let b = &mut sys.boards[0];

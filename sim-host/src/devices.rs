@@ -196,16 +196,29 @@ pub struct Analog {
     pub led_ma: f64,
 }
 
+/// What the LED driver is set to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Drive {
+    /// Selected beacon, 0..=7.
+    pub beacon: u8,
+    /// Whether the selected beacon's LED is on.
+    pub on: bool,
+    /// Drive current set point, mA.
+    pub level_ma: u16,
+}
+
 /// The optical sensor seen from the sensing board's converters (lateral-effect photodiode,
-/// lens, analog sum/difference/divide). The sensing issue supplies the full model; the
-/// simulator's worlds implement it.
+/// lens, analog sum/difference/divide and filters; `crate::optics` has the model).
 pub trait Optics {
-    /// The analog signals at time `t_s` with beacon `beacon` selected and its LED `on`.
-    fn sample(&mut self, beacon: u8, on: bool, t_s: f64) -> Analog;
+    /// The LED driver changed to `d` at `t_s`: the analog chain starts settling towards the
+    /// new beacon.
+    fn drive(&mut self, _d: Drive, _t_s: f64) {}
+    /// The analog signals at time `t_s` under drive `d`.
+    fn sample(&mut self, d: Drive, t_s: f64) -> Analog;
 }
 
 /// A/D conversion time (a 12-bit successive-approximation converter of the period, 25 us).
-pub const ADC_CONVERSION_S: f64 = 25e-6;
+pub const ADC_CONVERSION_S: f64 = regs::sensing::ADC_CONVERSION_US as f64 * 1e-6;
 /// A/D input span: -10..+10 V.
 pub const ADC_SPAN_V: f64 = 10.0;
 
@@ -215,6 +228,7 @@ pub struct SensingIo<O: Optics> {
     pub optics: O,
     select: u8,
     led: LedCtrl,
+    level_ma: u16,
     started: Option<u64>,
     /// What the track-and-hold captured at the last start.
     held: Analog,
@@ -229,9 +243,19 @@ impl<O: Optics> SensingIo<O> {
             optics,
             select: 0,
             led: LedCtrl::empty(),
+            level_ma: regs::sensing::LED_LEVEL_RESET_MA,
             started: None,
             held: Analog::default(),
             previous: None,
+        }
+    }
+
+    /// The LED driver's state.
+    pub fn drive_state(&self) -> Drive {
+        Drive {
+            beacon: self.select,
+            on: self.led.contains(LedCtrl::ENABLE),
+            level_ma: self.level_ma,
         }
     }
 
@@ -272,10 +296,12 @@ impl<O: Optics> Device for SensingIo<O> {
         Some(match off {
             regs::BOARD_ID => 0,
             LED_CTRL => self.led.bits(),
+            LED_LEVEL => self.level_ma,
+            TIMER => timer_at(now),
             LED_CURRENT => {
-                let on = self.led.contains(LedCtrl::ENABLE);
+                let d = self.drive_state();
                 self.optics
-                    .sample(self.select, on, seconds(now))
+                    .sample(d, seconds(now))
                     .led_ma
                     .round()
                     .clamp(0.0, 65535.0) as u16
@@ -311,18 +337,24 @@ impl<O: Optics> Device for SensingIo<O> {
         if !decodes(&REGISTERS, off, true) {
             return false;
         }
+        let before = self.drive_state();
         match off {
             LED_SELECT => self.select = (val & 7) as u8,
             LED_CTRL => self.led = LedCtrl::from_bits_truncate(val),
+            LED_LEVEL => self.level_ma = val.min(LED_LEVEL_MAX_MA),
             ADC_CTRL if AdcCtrl::from_bits_truncate(val).contains(AdcCtrl::START) => {
                 // Track-and-hold at the start of conversion; the previous result stays
                 // readable until this one completes.
                 self.previous = self.result(now);
-                let on = self.led.contains(LedCtrl::ENABLE);
-                self.held = self.optics.sample(self.select, on, seconds(now));
+                let d = self.drive_state();
+                self.held = self.optics.sample(d, seconds(now));
                 self.started = Some(now);
             }
             _ => {}
+        }
+        let after = self.drive_state();
+        if after != before {
+            self.optics.drive(after, seconds(now));
         }
         true
     }
@@ -342,7 +374,7 @@ pub fn standalone(board: BoardId) -> Box<dyn Device> {
 pub struct Dark;
 
 impl Optics for Dark {
-    fn sample(&mut self, _beacon: u8, _on: bool, _t_s: f64) -> Analog {
+    fn sample(&mut self, _d: Drive, _t_s: f64) -> Analog {
         Analog::default()
     }
 }
@@ -448,13 +480,13 @@ mod tests {
 
     struct Lit;
     impl Optics for Lit {
-        fn sample(&mut self, beacon: u8, on: bool, _t: f64) -> Analog {
-            if on {
+        fn sample(&mut self, d: Drive, _t: f64) -> Analog {
+            if d.on {
                 Analog {
-                    x_v: beacon as f64,
+                    x_v: d.beacon as f64,
                     y_v: -12.0,
                     sum_v: 5.0,
-                    led_ma: 500.0,
+                    led_ma: d.level_ma as f64,
                 }
             } else {
                 Analog::default()
@@ -471,7 +503,20 @@ mod tests {
         assert!(st(&mut s, 0).is_empty(), "idle before the first start");
         s.write16(sn::LED_SELECT, 3, 0);
         s.write16(sn::LED_CTRL, LedCtrl::ENABLE.bits(), 0);
+        assert_eq!(s.read16(sn::LED_CURRENT, 0), Some(560), "reset drive level");
+        s.write16(sn::LED_LEVEL, 5000, 0);
+        assert_eq!(
+            s.read16(sn::LED_LEVEL, 0),
+            Some(1000),
+            "clamped to the driver's maximum"
+        );
+        s.write16(sn::LED_LEVEL, 500, 0);
         assert_eq!(s.read16(sn::LED_CURRENT, 0), Some(500));
+        assert_eq!(
+            s.read16(sn::TIMER, CPU_HZ / 1000),
+            Some(2000),
+            "2 MHz timer"
+        );
         s.write16(sn::ADC_CTRL, regs::sensing::AdcCtrl::START.bits(), 100);
         let conv = (ADC_CONVERSION_S * CPU_HZ as f64).ceil() as u64;
         assert_eq!(st(&mut s, 100 + conv - 1), AdcStatus::BUSY);

@@ -6,7 +6,8 @@ use std::fmt::Write;
 use vme_map::layout::{BoardSlot, Writer, LAYOUT};
 use vme_map::record::{Record, SeqLock};
 use vme_map::records::{
-    HostCommand, ObjectTable, PlannerGoal, ReflexSubgoal, ServoState, WorkEntry,
+    cal, HostCommand, ObjectTable, PlannerGoal, RawTable, ReflexSubgoal, SensingConfig,
+    SensingDrift, ServoState, WorkEntry,
 };
 use vme_map::{BoardId, FaultRecord, GLOBAL_RAM_BASE};
 
@@ -89,6 +90,9 @@ pub fn memory_map() -> String {
     fields::<ReflexSubgoal>(&mut o, "reflex_subgoal", vme_map::REFLEX_SUBGOAL);
     fields::<PlannerGoal>(&mut o, "planner_goal", vme_map::PLANNER_GOAL);
     fields::<HostCommand>(&mut o, "host_command", vme_map::HOST_COMMAND);
+    fields::<SensingConfig>(&mut o, "sensing_config", vme_map::SENSING_CONFIG);
+    fields::<SensingDrift>(&mut o, "sensing_drift", vme_map::SENSING_DRIFT);
+    fields::<RawTable>(&mut o, "sensing_raw", vme_map::SENSING_RAW);
     writeln!(
         o,
         "\n#### `work_list` entry {} bytes, {} entries from `{:#06x}`\n",
@@ -101,6 +105,32 @@ pub fn memory_map() -> String {
     for (i, f) in WorkEntry::FIELDS.iter().enumerate() {
         writeln!(o, "| {i} | `{f}` |").unwrap();
     }
+    writeln!(
+        o,
+        "\n#### `sensing_cal`: {} words (format `vme_map::records::cal`, docs/sensing.md)\n",
+        cal::WORDS
+    )
+    .unwrap();
+    writeln!(o, "| words | content |\n|---|---|").unwrap();
+    writeln!(o, "| 0..{} | header |", cal::HEADER).unwrap();
+    writeln!(
+        o,
+        "| {}..{} | forward grid, {} x {} (x_q5, y_q5) |",
+        cal::FWD,
+        cal::INV,
+        cal::FWD_N,
+        cal::FWD_N
+    )
+    .unwrap();
+    writeln!(
+        o,
+        "| {}..{} | inverse grid, {} x {} (x_um, y_um) |",
+        cal::INV,
+        cal::WORDS,
+        cal::INV_N,
+        cal::INV_N
+    )
+    .unwrap();
     o
 }
 

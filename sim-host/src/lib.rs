@@ -23,10 +23,13 @@ pub mod devices;
 pub mod docs;
 pub mod emu;
 pub mod image;
+pub mod optics;
 pub mod plant;
 pub mod plots;
 pub mod run;
 pub mod scenario;
+pub mod sensing_bench;
+pub mod sensing_cal;
 pub mod servo_bench;
 pub mod sim;
 

@@ -49,9 +49,15 @@ enum Cmd {
         /// Repetitions (the report gives best, median and worst).
         #[arg(long, default_value_t = 5)]
         reps: usize,
-        /// Where `servo` writes its pictures.
-        #[arg(long, default_value = "out/bench-servo")]
-        out: PathBuf,
+        /// Where `servo` and `sensing` write their pictures (default out/bench-<what>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// `sensing`: a quick look (8 x 8 scan, 70 survey points) instead of the full bench.
+        #[arg(long)]
+        quick: bool,
+        /// `sensing`: the seed of the sensor model and the survey.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
     },
     /// Profile one board image on the emulated 68020: cycles per main-loop pass and the
     /// functions they go to.
@@ -163,6 +169,8 @@ fn main() -> ExitCode {
             seconds,
             reps,
             out,
+            quick,
+            seed,
         } => match what.as_str() {
             "sim" => {
                 let r = sim_host::bench::sim(seconds, reps);
@@ -181,7 +189,27 @@ fn main() -> ExitCode {
                     }
                 }
             }
-            "servo" => match sim_host::servo_bench::report(&out) {
+            "sensing" => {
+                let out = out.unwrap_or_else(|| PathBuf::from("out/bench-sensing"));
+                let size = if quick {
+                    sim_host::sensing_bench::Size::quick()
+                } else {
+                    sim_host::sensing_bench::Size::full()
+                };
+                match sim_host::sensing_bench::report(&out, size, seed) {
+                    Ok(r) => {
+                        print!("{r}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("sim-host: bench sensing: {e}");
+                        ExitCode::FAILURE
+                    }
+                }
+            }
+            "servo" => match sim_host::servo_bench::report(
+                &out.unwrap_or_else(|| PathBuf::from("out/bench-servo")),
+            ) {
                 Ok(r) => {
                     print!("{r}");
                     ExitCode::SUCCESS
@@ -192,7 +220,7 @@ fn main() -> ExitCode {
                 }
             },
             other => {
-                eprintln!("sim-host: unknown benchmark {other:?} (sim, servo)");
+                eprintln!("sim-host: unknown benchmark {other:?} (sim, servo, cspace, sensing)");
                 ExitCode::from(2)
             }
         },

@@ -376,3 +376,84 @@ fn panel(
         .draw()
         .map_err(err)
 }
+
+/// The sensing bench's picture (like thesis fig. II.7): on the left the calibration scan's
+/// signal lines (tip x volts against y volts, one line per 2 cm row of the grid); in the
+/// middle and on the right the survey's mean error at each point as an arrow, for the
+/// thesis's firmware and ours, both with drift and LED intensity errors on.
+pub fn sensing_errors(
+    path: &Path,
+    cases: &[crate::sensing_bench::CaseResult],
+) -> Result<(), String> {
+    use crate::sensing_cal::{N, Q5_PER_V};
+    font()?;
+    let root = BitMapBackend::new(path, (1800, 640)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let root = root
+        .titled(
+            "sensing: calibration scan and position errors",
+            ("sans-serif", 22),
+        )
+        .map_err(err)?;
+    let panels = root.split_evenly((1, 3));
+    let scan = cases
+        .iter()
+        .find(|c| c.case.warmth > 0.0 && c.case.options != 0)
+        .or(cases.first())
+        .ok_or("no case")?;
+    let mut c = ChartBuilder::on(&panels[0])
+        .caption("scan: tip signals, 36 rows 2 cm apart", ("sans-serif", 16))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-10.0..10.0, -10.0..10.0)
+        .map_err(err)?;
+    c.configure_mesh()
+        .x_desc("x signal (V)")
+        .y_desc("y signal (V)")
+        .draw()
+        .map_err(err)?;
+    for j in 0..N {
+        let row: Vec<(f64, f64)> = (0..N)
+            .map(|i| {
+                let s = scan.scan_signals_q5[j * N + i];
+                (s[0] / Q5_PER_V, s[1] / Q5_PER_V)
+            })
+            .collect();
+        c.draw_series(LineSeries::new(row, BLUE.stroke_width(1)))
+            .map_err(err)?;
+    }
+    for (k, (want_thesis, scale)) in [(true, 2.0), (false, 20.0)].into_iter().enumerate() {
+        let Some(case) = cases
+            .iter()
+            .find(|c| c.case.warmth > 0.0 && (c.case.options == 0) == want_thesis)
+        else {
+            continue;
+        };
+        let title = format!(
+            "{}: error x{scale} (rms {:.1} mm, max {:.1} mm)",
+            case.case.name, case.errors.rms_mm, case.errors.max_mm
+        );
+        let mut c = ChartBuilder::on(&panels[k + 1])
+            .caption(title, ("sans-serif", 14))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(-0.4..0.4, -0.4..0.4)
+            .map_err(err)?;
+        c.configure_mesh()
+            .x_desc("x (m)")
+            .y_desc("y (m)")
+            .draw()
+            .map_err(err)?;
+        for p in &case.errors.points {
+            let from = (p[0], p[1]);
+            let to = (p[0] + scale * p[2], p[1] + scale * p[3]);
+            c.draw_series(LineSeries::new([from, to], RED.stroke_width(1)))
+                .map_err(err)?;
+            c.draw_series(std::iter::once(Circle::new(from, 1, BLACK.filled())))
+                .map_err(err)?;
+        }
+    }
+    root.present().map_err(err)
+}

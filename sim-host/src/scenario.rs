@@ -3,7 +3,10 @@
 //! Unknown keys, wrong types and impossible values are errors that name the file, the line
 //! and the reason; nothing in a file is silently ignored.
 
-use crate::sim::{Config, Fault, FaultKind, Motion, Obstacle, WandPath, DEFAULT_PERIODS_S};
+use crate::optics::{BeaconWindow, OpticsConfig};
+use crate::sim::{
+    Calibration, Config, Fault, FaultKind, Motion, Obstacle, WandPath, DEFAULT_PERIODS_S,
+};
 use arm::geometry::Disk;
 use serde::Deserialize;
 use std::fmt;
@@ -63,6 +66,32 @@ struct File {
     boards: Vec<Spanned<BoardDe>>,
     #[serde(default)]
     fault: Vec<Spanned<FaultDe>>,
+    optics: Option<Spanned<OpticsDe>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OpticsDe {
+    #[serde(default)]
+    ideal: bool,
+    distortion: Option<bool>,
+    noise_mm: Option<Spanned<f64>>,
+    intensity: Option<bool>,
+    ambient: Option<bool>,
+    drift: Option<Spanned<[f64; 3]>>,
+    #[serde(default)]
+    occluded: Vec<Spanned<WindowDe>>,
+    #[serde(default)]
+    saturated: Vec<Spanned<WindowDe>>,
+    calibration: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WindowDe {
+    beacon: u8,
+    from_s: f64,
+    until_s: f64,
 }
 
 fn default_seed() -> u64 {
@@ -356,6 +385,71 @@ impl Scenario {
                 kind,
             });
         }
+        if let Some(o) = &f.optics {
+            let v = o.get_ref();
+            let mut c = if v.ideal {
+                OpticsConfig::ideal()
+            } else {
+                OpticsConfig::default()
+            };
+            c.distortion = v.distortion.unwrap_or(c.distortion);
+            c.intensity = v.intensity.unwrap_or(c.intensity);
+            c.ambient = v.ambient.unwrap_or(c.ambient);
+            if let Some(n) = &v.noise_mm {
+                let x = *n.get_ref();
+                if !(0.0..=100.0).contains(&x) {
+                    return Err(err(
+                        n.span().start,
+                        format!("noise_mm must be in 0..=100, got {x}"),
+                    ));
+                }
+                c.noise_mm = x;
+            }
+            if let Some(dr) = &v.drift {
+                let [w0, w1, tau] = *dr.get_ref();
+                if !(w0.is_finite()
+                    && w1.is_finite()
+                    && (0.0..=2.0).contains(&w0)
+                    && (0.0..=2.0).contains(&w1)
+                    && tau >= 0.0
+                    && tau.is_finite())
+                {
+                    return Err(err(dr.span().start, format!("drift = [warmth at 0 s, warmth it tends to, time constant s]: warmths in 0..=2, time constant >= 0; got {:?}", dr.get_ref())));
+                }
+                c.drift = (w0, w1, tau);
+            }
+            for (list, out) in [
+                (&v.occluded, &mut c.occluded),
+                (&v.saturated, &mut c.saturated),
+            ] {
+                for w in list {
+                    let x = w.get_ref();
+                    if x.beacon > 7
+                        || !(x.from_s >= 0.0 && x.until_s > x.from_s && x.until_s.is_finite())
+                    {
+                        return Err(err(w.span().start, format!("a beacon window needs beacon 0..=7 and 0 <= from_s < until_s, got beacon {} from {} until {}", x.beacon, x.from_s, x.until_s)));
+                    }
+                    out.push(BeaconWindow {
+                        beacon: x.beacon,
+                        from_s: x.from_s,
+                        until_s: x.until_s,
+                    });
+                }
+            }
+            if let Some(k) = &v.calibration {
+                cfg.calibration = match k.get_ref().as_str() {
+                    "model" => Calibration::Model,
+                    "none" => Calibration::None,
+                    other => {
+                        return Err(err(
+                            k.span().start,
+                            format!("unknown calibration {other:?} (model, none)"),
+                        ))
+                    }
+                };
+            }
+            cfg.optics = c;
+        }
         Ok(Scenario {
             name: f.name,
             description: f.description,
@@ -397,6 +491,14 @@ rate_hz = 3000
 at_s = 0.25
 board = "servo"
 kind = "halt"
+
+[optics]
+noise_mm = 3.0
+intensity = false
+drift = [0.0, 1.0, 600.0]
+occluded = [{ beacon = 2, from_s = 0.1, until_s = 0.2 }]
+saturated = [{ beacon = 4, from_s = 0.3, until_s = 0.4 }]
+calibration = "none"
 "#;
 
     #[test]
@@ -410,6 +512,49 @@ kind = "halt"
             s.config.obstacles[0].motion,
             Motion::Circle { .. }
         ));
+        let o = &s.config.optics;
+        assert_eq!(o.noise_mm, 3.0);
+        assert!(
+            !o.intensity && o.distortion && o.ambient,
+            "unset keys keep the defaults"
+        );
+        assert_eq!(o.drift, (0.0, 1.0, 600.0));
+        assert_eq!(o.occluded[0].beacon, 2);
+        assert_eq!(o.saturated[0].until_s, 0.4);
+        assert_eq!(s.config.calibration, Calibration::None);
+    }
+
+    #[test]
+    fn bad_optics_name_their_line() {
+        for (from, to, says) in [
+            ("noise_mm = 3.0", "noise_mm = -1.0", "noise_mm must be"),
+            (
+                "drift = [0.0, 1.0, 600.0]",
+                "drift = [0.0, 5.0, 600.0]",
+                "warmths in 0..=2",
+            ),
+            (
+                "beacon = 2, from_s = 0.1",
+                "beacon = 9, from_s = 0.1",
+                "beacon 0..=7",
+            ),
+            (
+                "calibration = \"none\"",
+                "calibration = \"guess\"",
+                "unknown calibration",
+            ),
+            (
+                "intensity = false",
+                "intensty = false",
+                "unknown field `intensty`",
+            ),
+        ] {
+            let e = broken(from, to);
+            assert!(
+                e.starts_with(&format!("bad.toml:{}:", line_of(from))) && e.contains(says),
+                "{e}"
+            );
+        }
     }
 
     fn broken(from: &str, to: &str) -> String {

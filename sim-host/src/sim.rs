@@ -13,8 +13,9 @@
 //! commands the DACs hold (sampled every `dt`, well inside the amplifier's 106 us lag); then
 //! the collision oracle runs. A seed fixes every random choice, so a run is bit-identical.
 
-use crate::devices::{Analog, IdOnly, MotorSample, Optics, SensingIo, ServoIo};
+use crate::devices::{IdOnly, MotorSample, SensingIo, ServoIo};
 use crate::emu::{Device, CPU_HZ};
+use crate::optics::{Camera, OpticsConfig};
 use crate::plant::{Plant, DEFAULT_DT_S};
 use arm::geometry::{Disk, Pose};
 use regs::IoBus;
@@ -164,6 +165,22 @@ pub struct Config {
     pub boards: Vec<(BoardId, f64)>,
     /// Faults to inject.
     pub faults: Vec<Fault>,
+    /// The optical sensor.
+    pub optics: OpticsConfig,
+    /// The calibration table the host writes before the boards boot.
+    pub calibration: Calibration,
+}
+
+/// Where the sensing board's calibration table comes from at power-up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Calibration {
+    /// None: the sensing board publishes no valid position until the host writes one (the
+    /// state the calibration procedure starts from).
+    None,
+    /// The table the thesis's scan would record with a noiseless sensor at the calibration
+    /// temperature, sampled from the optical model on the same 36 x 36 grid and inverted by
+    /// the same code (`sim-host calibrate` runs the real procedure; see docs/sensing.md).
+    Model,
 }
 
 impl Default for Config {
@@ -177,6 +194,8 @@ impl Default for Config {
             wand: WandPath::default(),
             boards: DEFAULT_PERIODS_S.to_vec(),
             faults: Vec::new(),
+            optics: OpticsConfig::default(),
+            calibration: Calibration::Model,
         }
     }
 }
@@ -201,35 +220,9 @@ pub enum FaultKind {
     BusError,
 }
 
-/// Ideal optics until the sensing issue's model: each lit beacon's position maps linearly to
-/// +-10 V over +-0.6 m, and the sum signal is 5 V. No noise, no distortion.
-#[derive(Clone, Debug, Default)]
-pub struct IdealOptics {
-    /// Beacon positions (m), `None` when the beacon does not exist.
-    pub beacons: [Option<(f64, f64)>; 8],
-}
-
-impl Optics for IdealOptics {
-    fn sample(&mut self, beacon: u8, on: bool, _t_s: f64) -> Analog {
-        match (on, self.beacons[beacon as usize & 7]) {
-            (true, Some((x, y))) => Analog {
-                x_v: x / 0.6 * 10.0,
-                y_v: y / 0.6 * 10.0,
-                sum_v: 5.0,
-                led_ma: 500.0,
-            },
-            (true, None) => Analog {
-                led_ma: 500.0,
-                ..Default::default()
-            },
-            _ => Analog::default(),
-        }
-    }
-}
-
 /// One board's code, run natively.
 enum Native {
-    Sensing(board_sensing::Board),
+    Sensing(Box<board_sensing::Board>),
     Cspace(board_cspace::Board),
     Servo(board_servo::Board),
     Reflex(board_reflex::Board),
@@ -239,7 +232,7 @@ enum Native {
 impl Native {
     fn new(id: BoardId) -> Self {
         match id {
-            BoardId::Sensing => Native::Sensing(board_sensing::Board::new()),
+            BoardId::Sensing => Native::Sensing(Box::new(board_sensing::Board::new())),
             BoardId::Servo => Native::Servo(board_servo::Board::new()),
             BoardId::Reflex => Native::Reflex(board_reflex::Board::new()),
             BoardId::Planner => Native::Planner(board_planner::Board::new()),
@@ -257,7 +250,7 @@ impl Native {
     }
     fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
         match self {
-            Native::Sensing(b) => b.poll(g, io),
+            Native::Sensing(b) => b.poll(&mut &mut *g, io),
             Native::Cspace(b) => b.poll(&mut &mut *g, io),
             Native::Servo(b) => b.poll(g, io),
             Native::Reflex(b) => b.poll(g, io),
@@ -334,7 +327,7 @@ pub struct Sim {
     /// The servo board's devices.
     pub servo_io: ServoIo,
     /// The sensing board's devices.
-    pub sensing_io: SensingIo<IdealOptics>,
+    pub sensing_io: SensingIo<Camera>,
     slots: Vec<Slot>,
     faults: Vec<Fault>,
     /// Plant steps done.
@@ -358,7 +351,12 @@ impl Sim {
         vme_map::init_header(&mut ArrayBus::new(&mut global));
         let plant = Plant::new(cfg.start_rad, cfg.dt_s);
         let servo_io = ServoIo::new(cfg.start_rad);
-        let sensing_io = SensingIo::new(IdealOptics::default());
+        let camera = Camera::new(cfg.optics.clone(), cfg.seed);
+        if cfg.calibration == Calibration::Model {
+            let table = crate::sensing_cal::model_table(&camera);
+            crate::sensing_cal::write_table(&mut ArrayBus::new(&mut global), &table, 1);
+        }
+        let sensing_io = SensingIo::new(camera);
         let slots = cfg
             .boards
             .iter()
@@ -404,6 +402,15 @@ impl Sim {
     /// Simulated time.
     pub fn t_s(&self) -> f64 {
         self.steps as f64 * self.cfg.dt_s
+    }
+
+    /// Where the sensing board's clock (microseconds from its first strobe slot) started, in
+    /// simulated microseconds: its first pass.
+    pub fn sensing_clock_offset_us(&self) -> f64 {
+        self.slots
+            .iter()
+            .find(|s| s.id == BoardId::Sensing)
+            .map_or(0.0, |s| (s.next_s - s.polls as f64 * s.period_s) * 1e6)
     }
 
     /// Global RAM as the host sees it.

@@ -1,0 +1,321 @@
+//! The sensing board (issue 6): the image against the host, occlusion and saturation in the
+//! running system, the calibration procedure, and the image's strobe rate on the emulated
+//! 68020.
+
+use sim_host::boot::System;
+use sim_host::emu::EmuBoard;
+use sim_host::image::Image;
+use sim_host::optics::{BeaconWindow, Camera, OpticsConfig};
+use sim_host::sensing_bench::{self, place, system};
+use sim_host::sensing_cal::{self, ScanPlan};
+use sim_host::sim::{Calibration, Rng};
+use system_tests::images_dir;
+use vme_map::records::beacon_flags as bf;
+use vme_map::{BoardId, BoardState, FaultCode, GLOBAL_RAM_SIZE};
+
+/// Scratch RAM for probe arguments: above the image (under 64 KiB) and its 5000-slot
+/// script and results (340 KiB), well below the stack at the top of the 1 MiB.
+const BUF: u32 = 0x0002_0000;
+
+/// Scripted slots for the probe: eight words each (see `sensing_probe_run`).
+fn script(n: usize) -> Vec<u32> {
+    let mut rng = Rng::new(42);
+    let mut w = Vec::new();
+    let mut timer = 1000u32;
+    // Resting beacons at spread codes; beacon 3 moves; beacon 2 occluded for a while,
+    // beacon 4 saturated for a while; the tip at codes near the forward grid of its angles.
+    for i in 0..n {
+        timer = timer.wrapping_add(498 + (rng.next_u64() % 5) as u32);
+        let b = (i + 6) % 8; // the beacon whose sample is read at slot i (lit at i - 2)
+        let base = [(-900 + 230 * b as i32), (700 - 180 * b as i32)];
+        let drift = if b == 3 { (i as i32 / 8) % 400 } else { 0 };
+        let noise = |r: &mut Rng| (r.next_u64() % 61) as i32 - 30;
+        let x = 2048 + base[0] + drift + noise(&mut rng);
+        let y = 2048 + base[1] + noise(&mut rng);
+        let mut sum = 2048 + 800 + noise(&mut rng) / 10;
+        let mut flags = 1u32;
+        if b == 2 && (800..1200).contains(&i) {
+            sum = 2048 + 40;
+        }
+        if b == 4 && (1500..1600).contains(&i) {
+            flags |= 2;
+        }
+        if b == 5 {
+            flags |= 4;
+        }
+        let first_slot = i < 2;
+        w.extend_from_slice(&[
+            timer & 0xFFFF,
+            x as u32,
+            y as u32,
+            sum as u32,
+            if first_slot { 0 } else { flags },
+            300_000,
+            (-1_200_000i32) as u32,
+            i as u32,
+        ]);
+    }
+    w
+}
+
+/// The host's run of the same script: nine words per slot as the probe writes them.
+fn host_run(inputs: &[u32], global: &mut [u8]) -> Vec<i32> {
+    let mut s = sensing::Sensing::new();
+    let mut g = vme_map::ArrayBus::new(global);
+    let mut out = Vec::new();
+    for w in inputs.chunks(8) {
+        let Some(slot) = s.slot(w[0] as u16) else {
+            out.extend_from_slice(&[-1; 9]);
+            continue;
+        };
+        let sample = (w[4] & 1 != 0).then(|| sensing::AdcSample {
+            x: w[1] as u16,
+            y: w[2] as u16,
+            sum: w[3] as u16,
+            over: w[4] & 2 != 0,
+        });
+        let servo = (w[4] & 4 != 0).then(|| sensing::ServoView {
+            theta_urad: [w[5] as i32, w[6] as i32],
+            omega_urad_s: [0, 0],
+            loops: w[7],
+        });
+        let input = sensing::Input {
+            sample,
+            servo,
+            config: None,
+        };
+        let o = s.step(&input, &mut board_sensing_cal(&mut g));
+        let b = o.beacon.map_or(8, |b| b as usize);
+        out.extend_from_slice(&[
+            slot.next as i32,
+            slot.level_ma as i32,
+            b as i32,
+            o.event as i32,
+        ]);
+        if b < 8 {
+            let r = s.objects.beacons[b];
+            let raw = s.raw.beacons[b];
+            out.extend_from_slice(&[r.x_um, r.y_um, r.flags as i32, raw.x_q5, raw.y_q5]);
+        } else {
+            out.extend_from_slice(&[0; 5]);
+        }
+    }
+    out
+}
+
+/// The calibration table in host global RAM.
+struct Cal<'a, 'b>(&'a mut vme_map::ArrayBus<'b>);
+impl sensing::cal::CalWords for Cal<'_, '_> {
+    fn word(&mut self, i: u32) -> u32 {
+        use vme_map::GlobalBus;
+        self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
+    }
+}
+fn board_sensing_cal<'a, 'b>(g: &'a mut vme_map::ArrayBus<'b>) -> Cal<'a, 'b> {
+    Cal(g)
+}
+
+/// The sensing image's logic (filter, feedback, crosstalk, table lookups, drift reference,
+/// flags, events) gives the host's results bit for bit over 5000 scripted slots.
+#[test]
+fn the_sensing_image_steps_like_the_host() {
+    let img = Image::load(&images_dir().join("sensing.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let table = sensing_cal::model_table(&Camera::new(OpticsConfig::default(), 1));
+    sensing_cal::write_table(&mut vme_map::ArrayBus::new(&mut global), &table, 3);
+    let mut b = EmuBoard::new(
+        BoardId::Sensing,
+        &img,
+        sim_host::devices::standalone(BoardId::Sensing),
+        &mut global,
+    );
+    let f = img
+        .symbol("sensing_probe_run")
+        .expect("sensing_probe_run in the image");
+    let n = 5000u32;
+    let inputs = script(n as usize);
+    let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
+    for (k, w) in inputs.iter().enumerate() {
+        let a = (inp + 4 * k as u32) as usize;
+        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    }
+    let (ret, _) = b
+        .call(&mut global, f, &[inp, n, out], 2_000_000_000)
+        .unwrap_or_else(|| {
+            let mut g = vme_map::ArrayBus::new(&mut global);
+            let f = vme_map::BoardSlot::of(BoardId::Sensing)
+                .fault()
+                .read(&mut g);
+            panic!(
+                "the probe returns: {:?} at pc {:#x}: {f:?}",
+                b.state, b.cpu.pc
+            )
+        });
+    assert_eq!(ret, 0);
+    let host = host_run(&inputs, &mut global);
+    let mut seen = [0usize; 4];
+    for i in 0..n as usize {
+        let got: Vec<i32> = (0..9)
+            .map(|k| {
+                let a = (out + 4 * (9 * i + k) as u32) as usize;
+                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+            })
+            .collect();
+        assert_eq!(got, host[9 * i..9 * i + 9], "slot {i}");
+        let flags = host[9 * i + 6] as u32;
+        seen[0] += (flags & bf::VALID != 0) as usize;
+        seen[1] += (flags & bf::OCCLUDED != 0) as usize;
+        seen[2] += (flags & bf::SATURATED != 0) as usize;
+        seen[3] += (flags & bf::CORRECTED != 0) as usize;
+    }
+    // The script reached every path worth comparing.
+    assert!(
+        seen.iter().all(|&c| c > 0),
+        "valid, occluded, saturated, corrected: {seen:?}"
+    );
+}
+
+/// Runs a scenario of the sensing and servo boards with beacon 2 hidden or saturated from
+/// 1.0 s to 1.3 s; returns, for every 250 us, beacon 2's published flags and the time.
+fn window_run(occlude: bool) -> (Vec<(f64, u32)>, sim_host::sim::Sim) {
+    let w = BeaconWindow {
+        beacon: 2,
+        from_s: 1.0,
+        until_s: 1.3,
+    };
+    let optics = OpticsConfig {
+        occluded: if occlude { vec![w] } else { vec![] },
+        saturated: if occlude { vec![] } else { vec![w] },
+        ..OpticsConfig::default()
+    };
+    let mut sim = system(optics, Calibration::Model, 3);
+    place(&mut sim, 2, [0.1, -0.15]);
+    let mut cycle = 0;
+    let rest = sensing_cal::ik(0.0, 0.3).unwrap();
+    let mut out = Vec::new();
+    for _ in 0..(1.6 / 250e-6) as usize {
+        sensing_bench::hold_at(&mut sim, rest, 250e-6, &mut cycle);
+        let t = vme_map::OBJECTS.read(&mut sim.bus()).unwrap().0;
+        out.push((sim.t_s(), t.beacons[2].flags));
+    }
+    (out, sim)
+}
+
+fn check_window(v: &[(f64, u32)], bit: u32) {
+    // One strobe frame is 2 ms: the first sample in the window is published invalid by
+    // then, and nothing published from then to the window's end is valid.
+    let frame = 8.0 * 250e-6;
+    let before: Vec<_> = v.iter().filter(|(t, _)| (0.9..1.0).contains(t)).collect();
+    assert!(
+        before.iter().all(|(_, f)| f & bf::VALID != 0),
+        "valid before the window"
+    );
+    for (t, f) in v
+        .iter()
+        .filter(|(t, _)| *t >= 1.0 + frame + 0.5e-3 && *t < 1.3)
+    {
+        assert_eq!(
+            f & bf::VALID,
+            0,
+            "published valid at {t:.4} s inside the window"
+        );
+        assert_ne!(f & bit, 0, "flagged at {t:.4} s");
+    }
+    let back = v
+        .iter()
+        .find(|(t, f)| *t > 1.3 && f & bf::VALID != 0)
+        .expect("valid again after the window");
+    assert!(
+        back.0 < 1.3 + 0.05,
+        "valid again {:.4} s after",
+        back.0 - 1.3
+    );
+}
+
+#[test]
+fn an_occluded_beacon_is_invalid_within_one_frame_and_never_valid_while_hidden() {
+    let (v, mut sim) = window_run(true);
+    check_window(&v, bf::OCCLUDED);
+    // Occlusion is a fact of the world, not a fault of the board.
+    let st = vme_map::BoardSlot::of(BoardId::Sensing).status_word(&mut sim.bus());
+    assert_eq!(st.state(), Some(BoardState::Running));
+}
+
+#[test]
+fn a_saturated_beacon_is_invalid_within_one_frame_and_recorded_as_a_fault() {
+    let (v, mut sim) = window_run(false);
+    check_window(&v, bf::SATURATED);
+    let f = vme_map::BoardSlot::of(BoardId::Sensing)
+        .fault()
+        .read(&mut sim.bus())
+        .unwrap()
+        .0;
+    assert_eq!(f.code, FaultCode::AdcSaturated as u32);
+    assert_eq!(f.detail, 2, "the beacon");
+}
+
+/// The thesis's procedure, coarsely (every 7th grid point): the table it writes puts
+/// surveyed beacons within a few millimetres, and a corrupted copy is refused.
+#[test]
+fn the_calibration_scan_makes_a_table_the_board_uses() {
+    let mut sim = system(OpticsConfig::default(), Calibration::None, 5);
+    let plan = ScanPlan {
+        stride: 7,
+        frames: 16,
+    };
+    let (scan, stats) = sensing_cal::calibrate(&mut sim, plan).unwrap();
+    assert_eq!(stats.points, 36, "6 x 6 points");
+    assert!(
+        stats.worst_stop_m < 0.003,
+        "stopped {} m from a point",
+        stats.worst_stop_m
+    );
+    let table = sensing_cal::build_table(&scan);
+    sensing_cal::write_table(&mut sim.bus(), &table, 1);
+    let mut cycle = 0;
+    let rest = sensing_cal::ik(0.0, 0.3).unwrap();
+    let e = sensing_bench::survey(&mut sim, 14, 9, rest, &mut cycle);
+    assert_eq!(e.invalid, 0);
+    // A 6 x 6 scan interpolated to the grid: a few millimetres, not the thesis's 1296
+    // points' one (the bench measures that).
+    assert!(e.rms_mm < 4.0, "rms {} mm", e.rms_mm);
+    // A flipped bit in the table: every position goes invalid and the fault is recorded.
+    let mut bad = sensing_cal::read_table(&mut sim.bus());
+    bad[vme_map::records::cal::INV as usize + 77] ^= 1 << 3;
+    bad[vme_map::records::cal::W_GENERATION as usize] += 1;
+    for (i, w) in bad.iter().enumerate() {
+        use vme_map::GlobalBus;
+        sim.bus().write_u32(vme_map::SENSING_CAL + 4 * i as u32, *w);
+    }
+    sensing_bench::hold_at(&mut sim, rest, 0.2, &mut cycle);
+    let t = vme_map::OBJECTS.read(&mut sim.bus()).unwrap().0;
+    for b in t.beacons {
+        assert_eq!(b.flags & bf::VALID, 0);
+        assert_ne!(b.flags & bf::UNCALIBRATED, 0);
+    }
+    let st = vme_map::BoardSlot::of(BoardId::Sensing).status_word(&mut sim.bus());
+    assert_eq!(st.state(), Some(BoardState::Degraded));
+    assert_eq!(st.fault(), Some(FaultCode::BadCalibration));
+}
+
+/// The sensing image on the emulated 68020 with the optical model: every beacon published
+/// valid and within 4 mm, frame after frame. (Its strobe rate is a bench figure: `sim-host
+/// bench sensing` prints it against the thesis's 500 Hz; here only a floor of 250 Hz, half
+/// the target, guards against the image slowing down further.)
+#[test]
+fn the_sensing_image_publishes_every_beacon_accurately() {
+    let mut sys = System::power_up(&images_dir(), &[BoardId::Sensing]).unwrap();
+    sys.boards[0].io = sensing_bench::lit_camera(7);
+    sys.run_ms(1200.0);
+    let f0 = vme_map::OBJECTS.read(&mut sys.bus()).unwrap().0.frame;
+    sys.run_ms(1000.0);
+    let t = vme_map::OBJECTS.read(&mut sys.bus()).unwrap().0;
+    let rate = t.frame - f0;
+    assert!(rate >= 250, "{rate} frames in 1 s");
+    for (b, p) in sensing_bench::LIT_BEACONS.iter().enumerate() {
+        let r = t.beacons[b];
+        assert_ne!(r.flags & bf::VALID, 0, "beacon {b}");
+        let e = (r.x_um as f64 * 1e-6 - p[0]).hypot(r.y_um as f64 * 1e-6 - p[1]);
+        assert!(e < 0.004, "beacon {b} {:.2} mm off", e * 1e3);
+    }
+}
