@@ -422,12 +422,19 @@ pub fn sensing_errors(
             .collect();
         c.draw_series(LineSeries::new(row, BLUE.stroke_width(1)))
             .map_err(err)?;
+        let col: Vec<(f64, f64)> = (0..N)
+            .map(|i| {
+                let s = scan.scan_signals_q5[i * N + j];
+                (s[0] / Q5_PER_V, s[1] / Q5_PER_V)
+            })
+            .collect();
+        c.draw_series(LineSeries::new(col, BLUE.mix(0.3).stroke_width(1)))
+            .map_err(err)?;
     }
     for (k, (want_thesis, scale)) in [(true, 2.0), (false, 20.0)].into_iter().enumerate() {
-        let Some(case) = cases
-            .iter()
-            .find(|c| c.case.warmth > 0.0 && (c.case.options == 0) == want_thesis)
-        else {
+        let Some(case) = cases.iter().find(|c| {
+            c.case.warmth > 0.0 && c.case.optics.intensity && (c.case.options == 0) == want_thesis
+        }) else {
             continue;
         };
         let title = format!(

@@ -1,14 +1,14 @@
 //! The per-beacon position filter (thesis ch. II.3.3: "a running average of the 32 most
-//! recent signals"), made adaptive: a beacon that has rested for the whole of the last
-//! [`LONG`] samples (0.5 s) gets their average, a third of the thesis filter's noise; any
-//! other beacon gets the thesis's [`SHORT`]-sample average, with its 31 ms lag.
+//! recent signals"), made adaptive: a beacon that rests gets the average of every sample
+//! since it came to rest, up to [`LONG`] (a third of the thesis filter's noise once full),
+//! and a beacon that moves gets the thesis's [`SHORT`]-sample average (the same 31 ms lag).
 //!
-//! Two windows, 32 and 256 samples, so the means are shifts (no division on the 68020).
-//! Movement is detected when the short mean leaves the long one by more than [`MOVE_Q5`]
-//! (28 codes: 6 standard deviations of their difference at the model's noise; in codes, so
-//! the same everywhere in the field); the rest count restarts and the short window is used
-//! until the long one again holds only samples since then. A beacon that creeps slower than
-//! the threshold can show up to [`MOVE_Q5`] of extra lag (about 5 mm at the centre).
+//! Movement is detected when the short mean leaves the mean since rest by more than
+//! [`MOVE_Q5`] (28 codes: 6 standard deviations of their difference at the model's noise;
+//! in codes, so the same everywhere in the field); the long window then restarts from the
+//! short one and grows again while the beacon rests. Means use a table of reciprocals, not
+//! divisions (the 68020's slot budget). A beacon that creeps slower than the threshold can
+//! show up to [`MOVE_Q5`] of extra lag (about 5 mm at the centre).
 
 /// Largest window, samples (512 ms at 500 Hz per beacon).
 pub const LONG: usize = 256;
@@ -21,14 +21,14 @@ pub const MOVE_Q5: i32 = 28 << 5;
 
 const _: () = assert!(LONG == 256, "the ring index is a u8");
 
-/// 2^16 / n for n = 0..=32 (0 for n = 0): the mean of a filling window without a division
-/// (the 68020's budget is 4,175 cycles a slot).
-const RECIP_Q16: [i32; 33] = recips();
+/// 2^16 / n for n = 0..=256 (0 for n = 0): means of any window without a division (the
+/// 68020's budget is 4,175 cycles a slot).
+const RECIP_Q16: [i32; LONG + 1] = recips();
 
-const fn recips() -> [i32; 33] {
-    let mut t = [0; 33];
+const fn recips() -> [i32; LONG + 1] {
+    let mut t = [0; LONG + 1];
     let mut n = 1;
-    while n <= 32 {
+    while n <= LONG {
         t[n] = (1 << 16) / n as i32;
         n += 1;
     }
@@ -41,8 +41,8 @@ pub struct Axis {
     ring: [i16; LONG],
     /// Sum of the last `SHORT` samples (fewer while filling), Q2.
     short: i32,
-    /// Sum of the last `LONG` samples (fewer while filling), Q2.
-    long: i32,
+    /// Sum of the last `since` samples, Q2.
+    since: i32,
 }
 
 impl Axis {
@@ -50,7 +50,7 @@ impl Axis {
         Self {
             ring: [0; LONG],
             short: 0,
-            long: 0,
+            since: 0,
         }
     }
 }
@@ -62,7 +62,7 @@ pub struct Estimate {
     pub q5: [i32; 2],
     /// Samples averaged (saturating at 255).
     pub samples: u16,
-    /// The beacon moved within the last [`LONG`] samples: the short window is in use.
+    /// The beacon moved within the last [`SHORT`] samples: the short window is in use.
     pub moving: bool,
     /// Fewer samples than the window in use can hold.
     pub filling: bool,
@@ -75,6 +75,7 @@ pub struct Filter {
     next: u8,
     count: u16,
     since: u16,
+    moved: u16,
 }
 
 impl Default for Filter {
@@ -91,6 +92,7 @@ impl Filter {
             next: 0,
             count: 0,
             since: 0,
+            moved: 0,
         }
     }
 
@@ -99,10 +101,11 @@ impl Filter {
     pub fn reset(&mut self) {
         for a in self.axes.iter_mut() {
             a.short = 0;
-            a.long = 0;
+            a.since = 0;
         }
         self.count = 0;
         self.since = 0;
+        self.moved = 0;
     }
 
     /// Samples held (up to [`LONG`]).
@@ -117,12 +120,11 @@ impl Filter {
 
     /// Adds one sample, Q2 codes per axis; with `adaptive`, checks for movement.
     pub fn push(&mut self, q2: [i32; 2], adaptive: bool) {
-        let count = self.count as i32;
         // Masks, not branches: all ones when the window was full before this sample.
-        let full_short = (SHORT as i32 - 1 - count) >> 31;
-        let full_long = (LONG as i32 - 1 - count) >> 31;
-        push_axis(&mut self.axes[0], self.next, q2[0], full_short, full_long);
-        push_axis(&mut self.axes[1], self.next, q2[1], full_short, full_long);
+        let full_short = (SHORT as i32 - 1 - self.count as i32) >> 31;
+        let full_since = (LONG as i32 - 1 - self.since as i32) >> 31;
+        push_axis(&mut self.axes[0], self.next, q2[0], full_short, full_since);
+        push_axis(&mut self.axes[1], self.next, q2[1], full_short, full_since);
         self.next = self.next.wrapping_add(1);
         if (self.count as usize) < LONG {
             self.count += 1;
@@ -130,37 +132,53 @@ impl Filter {
         if (self.since as usize) < LONG {
             self.since += 1;
         }
-        if adaptive && self.count as usize == LONG {
-            let moved = moved_axis(&self.axes[0]) | moved_axis(&self.axes[1]);
-            // Start counting the rest again (by mask: docs/toolchain.md class 1).
-            let m = (moved as u16).wrapping_neg();
-            self.since &= !m;
+        self.moved = self.moved.saturating_add(1);
+        if adaptive && self.since as usize > SHORT {
+            let n = self.since as i32;
+            let moved = moved_axis(&self.axes[0], n) | moved_axis(&self.axes[1], n);
+            // Restart the long window from the short one (by mask: docs/toolchain.md
+            // class 1).
+            let m = (moved as i32).wrapping_neg();
+            for a in self.axes.iter_mut() {
+                a.since = (a.short & m) | (a.since & !m);
+            }
+            let m16 = m as u16;
+            self.since = (SHORT as u16 & m16) | (self.since & !m16);
+            self.moved &= !m16;
         }
     }
 
-    /// The estimate, or `None` with fewer than [`MIN_VALID`] samples: the long window for a
-    /// beacon that has rested for all of it (with `adaptive`), else the thesis's 32 (fewer
-    /// while filling).
+    /// The estimate, or `None` with fewer than [`MIN_VALID`] samples: with `adaptive`, the
+    /// mean of every sample since the beacon last moved (up to [`LONG`]); else, or when
+    /// that is fewer than 32, the thesis's 32 (fewer while filling).
     pub fn estimate(&self, adaptive: bool) -> Option<Estimate> {
         let n = self.count;
         if n < MIN_VALID {
             return None;
         }
-        let long = adaptive && self.since as usize >= LONG;
+        let long = adaptive && self.since as usize > SHORT;
         let window = if long {
-            LONG as u16
+            self.since
         } else {
             n.min(SHORT as u16)
         };
+        let q5 = if long {
+            [
+                since_mean(&self.axes[0], window as i32),
+                since_mean(&self.axes[1], window as i32),
+            ]
+        } else {
+            [
+                short_mean(&self.axes[0], window as i32),
+                short_mean(&self.axes[1], window as i32),
+            ]
+        };
         Some(Estimate {
-            q5: [
-                axis_mean(&self.axes[0], window as i32),
-                axis_mean(&self.axes[1], window as i32),
-            ],
+            q5,
             samples: window.min(255),
-            moving: adaptive && !long && n as usize >= LONG,
+            moving: adaptive && (self.moved as usize) < SHORT,
             filling: if adaptive {
-                !long && (n as usize) < LONG
+                (window as usize) < LONG
             } else {
                 (window as usize) < SHORT
             },
@@ -172,34 +190,36 @@ impl Filter {
 /// say whether they were full). (A function of its own: the ring is indexed through a
 /// reference, not a local array; docs/toolchain.md class 6.)
 #[inline(never)]
-fn push_axis(a: &mut Axis, next: u8, v: i32, full_short: i32, full_long: i32) {
+fn push_axis(a: &mut Axis, next: u8, v: i32, full_short: i32, full_since: i32) {
     let old_short = a.ring[next.wrapping_sub(SHORT as u8) as usize] as i32;
     let old_long = a.ring[next as usize] as i32;
     a.short += v - (old_short & full_short);
-    a.long += v - (old_long & full_long);
+    a.since += v - (old_long & full_since);
     a.ring[next as usize] = v as i16;
 }
 
-/// The mean of the last `n` samples of an axis, Q5 (`n` = 256, 32, or fewer than 32).
+/// The mean of the last `n` (<= 32) samples of an axis, Q5.
 #[inline(never)]
-fn axis_mean(a: &Axis, n: i32) -> i32 {
-    if n == LONG as i32 {
-        // A Q2 sum of 256 is Q10.
-        return a.long >> 5;
-    }
-    if n == SHORT as i32 {
-        // A Q2 sum of 32 is Q7.
-        return a.short >> 2;
-    }
-    // Q2 sum times 2^16 / n, to Q5: the sum (< 2^18) shifted down first keeps the product
-    // inside 32 bits.
-    ((a.short >> 2) * RECIP_Q16[n as usize]) >> 11
+fn short_mean(a: &Axis, n: i32) -> i32 {
+    // A Q2 sum of 32 is Q7; fewer: the sum times 2^16 / n, shifted down first to stay
+    // inside 32 bits (|sum| < 2^18).
+    let full = ((SHORT as i32 - 1 - n) >> 31) & 1;
+    let exact = a.short >> 2;
+    let filling = ((a.short >> 2) * RECIP_Q16[n as usize]) >> 11;
+    exact * full + filling * (1 - full)
 }
 
-/// Whether the short mean left the long one by more than the threshold.
+/// The mean of the `n` samples since the last movement (32 < n <= 256), Q5: the Q2 sum
+/// (|sum| < 2^21) shifted down 3, times 2^16 / n (< 2^11), shifted down 10.
 #[inline(never)]
-fn moved_axis(a: &Axis) -> bool {
-    let d = (a.short >> 2) - (a.long >> 5);
+fn since_mean(a: &Axis, n: i32) -> i32 {
+    ((a.since >> 3) * RECIP_Q16[n as usize]) >> 10
+}
+
+/// Whether the short mean left the mean since the last movement by more than the threshold.
+#[inline(never)]
+fn moved_axis(a: &Axis, n: i32) -> bool {
+    let d = (a.short >> 2) - since_mean(a, n);
     let m = d >> 31;
     ((d ^ m) - m) > MOVE_Q5
 }
