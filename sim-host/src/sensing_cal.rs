@@ -103,7 +103,13 @@ pub fn invert(scan: &Scan, c: [f64; 2]) -> ([f64; 2], f64) {
             d(a).total_cmp(&d(b))
         })
         .expect("a scan has points");
-    let (mut u, mut v) = ((nearest % N) as f64, (nearest / N) as f64);
+    newton(scan, c, [(nearest % N) as f64, (nearest / N) as f64])
+}
+
+/// Newton's method for [`invert`] from grid coordinates `start`.
+fn newton(scan: &Scan, c: [f64; 2], start: [f64; 2]) -> ([f64; 2], f64) {
+    let sig = &scan.signals_q5;
+    let [mut u, mut v] = start;
     let mut err = f64::INFINITY;
     for _ in 0..60 {
         let (f, j) = forward(sig, u, v);
@@ -152,13 +158,20 @@ pub fn build_table(scan: &Scan) -> Vec<u32> {
     // two): the inverse maps to grid coordinates, then to positions through the recorded
     // truths.
     let n = cal::INV_N as usize;
+    let mut prev: Option<[f64; 2]> = None;
     for j in 0..n {
         for i in 0..n {
             let c = [
                 ((i as f64) * 64.0 - 2048.0) * 32.0,
                 ((j as f64) * 64.0 - 2048.0) * 32.0,
             ];
-            let ([u, v], _) = invert(scan, c);
+            // From the neighbouring node's solution (the map is smooth); a full search
+            // where that does not converge.
+            let ([u, v], _) = match prev.map(|p| newton(scan, c, p)) {
+                Some((uv, e)) if e < 1e-3 => (uv, e),
+                _ => invert(scan, c),
+            };
+            prev = Some([u, v]);
             let p = truth_at(scan, u, v);
             let lim = cal::MAX_NODE_UM as f64;
             let k = cal::INV as usize + 2 * (j * n + i);

@@ -198,19 +198,20 @@ fn next_entry<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
     }
 }
 
-/// Whether entry `e` must be redrawn for beacon sample `b` with sweep (`sx`, `sy`): nothing
-/// drawn yet, or a new sample that moved the obstacle or changed its sweep. The sample the
+/// Whether entry `e` must be redrawn for beacon sample `b`: nothing
+/// drawn yet, or a new sample that moved the obstacle (its sweep is then redrawn too). The sample the
 /// image was drawn from again changes nothing (passes run much faster than the sensing
 /// board's frames, and must not undo the sweep). Written with bitwise ors of compares: the
 /// short-circuit form compiled to a condition-code clobber on the 68k (docs/toolchain.md).
 #[inline(never)]
-fn needs_redraw(e: &WorkEntry, b: &Beacon, sx: i32, sy: i32) -> bool {
-    let (ox, oy) = sweep_of(e);
+fn needs_redraw(e: &WorkEntry, b: &Beacon) -> bool {
     let fresh = (b.t_us != e.generation) as u32;
-    let moved = ((b.x_um - e.x_um).abs() > MOVE_UM) as u32
-        | ((b.y_um - e.y_um).abs() > MOVE_UM) as u32
-        | ((sx - ox).abs() > 1) as u32
-        | ((sy - oy).abs() > 1) as u32;
+    // A changed sweep counts only with a move beyond MOVE_UM: from the sensing board's
+    // resting noise (0.3-0.7 mm) over one 2 ms frame the velocity estimate alone would
+    // sweep 10 mm and redraw every frame. A stopped obstacle keeps its last (larger,
+    // conservative) sweep until it moves again.
+    let moved =
+        ((b.x_um - e.x_um).abs() > MOVE_UM) as u32 | ((b.y_um - e.y_um).abs() > MOVE_UM) as u32;
     let undrawn = (e.state & DRAWN == 0) as u32;
     (undrawn | (fresh & moved)) != 0
 }
@@ -228,7 +229,7 @@ fn job<B: GlobalBus + ?Sized>(g: &mut B, i: u32, b: &Beacon, e: &mut WorkEntry) 
     let drawn = e.state & DRAWN != 0;
     let (sx, sy, clamped) = sweep(e, b.x_um, b.y_um, b.t_us);
     out.clamped = clamped;
-    if !needs_redraw(e, b, sx, sy) {
+    if !needs_redraw(e, b) {
         return out;
     }
     // New image first, then the old one goes: no void ever opens.
