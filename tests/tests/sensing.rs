@@ -64,41 +64,10 @@ fn host_run(inputs: &[u32], global: &mut [u8]) -> Vec<i32> {
     let mut g = vme_map::ArrayBus::new(global);
     let mut out = Vec::new();
     for w in inputs.chunks(8) {
-        let Some(slot) = s.slot(w[0] as u16) else {
-            out.extend_from_slice(&[-1; 9]);
-            continue;
-        };
-        let sample = (w[4] & 1 != 0).then(|| sensing::AdcSample {
-            x: w[1] as u16,
-            y: w[2] as u16,
-            sum: w[3] as u16,
-            over: w[4] & 2 != 0,
-        });
-        let servo = (w[4] & 4 != 0).then(|| sensing::ServoView {
-            theta_urad: [w[5] as i32, w[6] as i32],
-            omega_urad_s: [0, 0],
-            loops: w[7],
-        });
-        let input = sensing::Input {
-            sample,
-            servo,
-            config: None,
-        };
-        let o = s.step(&input, &mut board_sensing_cal(&mut g));
-        let b = o.beacon.map_or(8, |b| b as usize);
-        out.extend_from_slice(&[
-            slot.next as i32,
-            slot.level_ma as i32,
-            b as i32,
-            o.event as i32,
-        ]);
-        if b < 8 {
-            let r = s.objects.beacons[b];
-            let raw = s.raw.beacons[b];
-            out.extend_from_slice(&[r.x_um, r.y_um, r.flags as i32, raw.x_q5, raw.y_q5]);
-        } else {
-            out.extend_from_slice(&[0; 5]);
-        }
+        let mut o = [0; 9];
+        let w: &[u32; 8] = w.try_into().expect("eight words a slot");
+        sensing::scripted_slot(&mut s, w, &mut Cal(&mut g), &mut o);
+        out.extend_from_slice(&o);
     }
     out
 }
@@ -110,9 +79,6 @@ impl sensing::cal::CalWords for Cal<'_, '_> {
         use vme_map::GlobalBus;
         self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
     }
-}
-fn board_sensing_cal<'a, 'b>(g: &'a mut vme_map::ArrayBus<'b>) -> Cal<'a, 'b> {
-    Cal(g)
 }
 
 /// The sensing image's logic (filter, feedback, crosstalk, table lookups, drift reference,

@@ -580,6 +580,59 @@ fn next_grid(due: u16, timer: u16, started: bool) -> u16 {
     ((due as i32 & on) | (timer as i32 & !on)) as u16
 }
 
+/// One strobe slot from eight scripted words, for the image-against-host test (the image's
+/// probe and the host run this same function): `w` = timer; x, y and sum codes; flags (bit
+/// 0: a sample was read, bit 1: it was over range, bit 2: a servo state was read); link 1
+/// and link 2 angles (micro-radians); the servo's loop count. Writes to `out`: the next
+/// beacon, its drive level, the processed beacon (8: none), the event code, and the
+/// processed beacon's x_um, y_um, flags, raw x_q5 and raw y_q5 (all -1 when no slot was
+/// due).
+pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out: &mut [i32; 9]) {
+    *out = [-1; 9];
+    let Some(slot) = s.slot(w[0] as u16) else {
+        return;
+    };
+    let f = w[4];
+    let sample = (f & 1 != 0).then(|| AdcSample {
+        x: w[1] as u16,
+        y: w[2] as u16,
+        sum: w[3] as u16,
+        over: f & 2 != 0,
+    });
+    let servo = (f & 4 != 0).then(|| ServoView {
+        theta_urad: [w[5] as i32, w[6] as i32],
+        omega_urad_s: [0, 0],
+        loops: w[7],
+    });
+    let input = Input {
+        sample,
+        servo,
+        config: None,
+    };
+    let o = s.step(&input, cal);
+    let b = o.beacon.map_or(8, |b| b as usize);
+    *out = [
+        slot.next as i32,
+        slot.level_ma as i32,
+        b as i32,
+        o.event as i32,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ];
+    if b < BEACONS {
+        let r = s.objects.beacons[b];
+        let raw = s.raw.beacons[b];
+        out[4] = r.x_um;
+        out[5] = r.y_um;
+        out[6] = r.flags as i32;
+        out[7] = raw.x_q5;
+        out[8] = raw.y_q5;
+    }
+}
+
 /// Whether `p` lies outside the calibrated area (with [`AREA_MARGIN_UM`]).
 #[inline(never)]
 fn outside(p: [i32; 2], area: &[i32; 4]) -> bool {
