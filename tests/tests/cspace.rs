@@ -152,3 +152,45 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
         }
     }
 }
+
+/// The object table caught mid-publish is skipped, not a fault; a table left torn (a writer
+/// that died mid-write) is recorded as TornRecord once it has stayed torn for
+/// `TORN_PASSES` passes.
+#[test]
+fn a_torn_object_table_is_a_fault_only_when_it_stays_torn() {
+    struct NoIo;
+    impl regs::IoBus for NoIo {
+        fn read16(&mut self, _off: u32) -> u16 {
+            0
+        }
+        fn write16(&mut self, _off: u32, _val: u16) {}
+    }
+    let mut global = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
+    let mut g = vme_map::ArrayBus::new(&mut global);
+    vme_map::init_header(&mut g);
+    let mut board = board_cspace::Board::new(vme_map::BoardId::Cspace0);
+    board.boot(&mut g, &mut NoIo);
+    vme_map::OBJECTS.publish_torn(&mut g, &vme_map::records::ObjectTable::default());
+    let slot = vme_map::BoardSlot::of(vme_map::BoardId::Cspace0);
+    for pass in 1..board_cspace::TORN_PASSES {
+        board.poll(&mut g, &mut NoIo);
+        let st = slot.status_word(&mut g);
+        assert_eq!(
+            st.state(),
+            Some(vme_map::BoardState::Running),
+            "pass {pass}"
+        );
+        assert_eq!(st.faults(), 0, "pass {pass}");
+    }
+    board.poll(&mut g, &mut NoIo);
+    let st = slot.status_word(&mut g);
+    assert_eq!(st.state(), Some(vme_map::BoardState::Degraded));
+    assert_eq!(st.fault(), Some(vme_map::FaultCode::TornRecord));
+    // A whole table again: running.
+    vme_map::OBJECTS.publish(&mut g, &vme_map::records::ObjectTable::default());
+    board.poll(&mut g, &mut NoIo);
+    assert_eq!(
+        slot.status_word(&mut g).state(),
+        Some(vme_map::BoardState::Running)
+    );
+}

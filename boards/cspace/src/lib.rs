@@ -24,8 +24,11 @@ pub struct Board {
     torn: u8,
 }
 
-/// Passes in a row the object table may read torn before that is a fault.
-pub const TORN_PASSES: u8 = 3;
+/// Passes in a row the object table may read torn before that is a fault. A skipped pass
+/// costs about a hundred cycles, so this spans several hundred microseconds: far longer than
+/// a publication takes (and than the emulator's 100 us time slices, during which a writer
+/// caught mid-publish stands still), far shorter than a dead writer goes unnoticed.
+pub const TORN_PASSES: u8 = 64;
 
 impl Board {
     /// The board's identity from its board-ID switch (0..=2 selects the C-space slot).
