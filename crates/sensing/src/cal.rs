@@ -208,7 +208,7 @@ const INV_CELLS: i32 = cal::INV_N as i32 - 1;
 
 /// The bilinear blend of four values with fractions in Q`sh`. The differences times the
 /// fractions stay inside 32 bits for the table's value ranges.
-#[inline(never)]
+#[inline(always)]
 fn bilinear(v: &[i32; 4], fx_q: i32, fy_q: i32, sh: u32) -> i32 {
     let a = v[0] + (((v[1] - v[0]) * fx_q) >> sh);
     let b = v[2] + (((v[3] - v[2]) * fx_q) >> sh);
@@ -217,7 +217,7 @@ fn bilinear(v: &[i32; 4], fx_q: i32, fy_q: i32, sh: u32) -> i32 {
 
 /// Reads the (x, y) pairs at the four corners of a cell starting at word `base` with
 /// `row` words per row into `xs`, `ys` (order: (0,0), (1,0), (0,1), (1,1)).
-#[inline(never)]
+#[inline(always)]
 fn corners(t: &mut impl CalWords, base: u32, row: u32, xs: &mut [i32; 4], ys: &mut [i32; 4]) {
     for k in 0..4u32 {
         let o = base + 2 * (k & 1) + row * (k >> 1);
@@ -227,7 +227,7 @@ fn corners(t: &mut impl CalWords, base: u32, row: u32, xs: &mut [i32; 4], ys: &m
 }
 
 /// Index and Q10 fraction of a Q5 signal in the inverse grid (clamped to the grid).
-#[inline(never)]
+#[inline(always)]
 fn inv_cell(v_q5: i32) -> (i32, i32) {
     let u = (v_q5 + Q5_HALF_SPAN).clamp(0, (INV_CELLS << cal::INV_CELL_SHIFT_Q5) - 1);
     (
@@ -252,7 +252,7 @@ pub fn position_um(t: &mut impl CalWords, v_q5: [i32; 2]) -> [i32; 2] {
 }
 
 /// Index and Q11 fraction of a coordinate along the forward grid, or `None` outside it.
-#[inline(never)]
+#[inline(always)]
 fn fwd_cell(p_um: i32, p0_um: i32, pitch_um: i32) -> Option<(i32, i32)> {
     let u = p_um - p0_um;
     if u < 0 || u >= (cal::FWD_N as i32 - 1) * pitch_um {

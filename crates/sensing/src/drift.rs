@@ -70,7 +70,7 @@ impl Drift {
 
 /// (v - o) / (1 + g) to second order in g (|g| <= 5 %: the third-order term is under
 /// 0.2 Q5 codes). In 32-bit products: the gain in Q16 (|g| < 2^12) times a signal (< 2^17).
-#[inline(never)]
+#[inline(always)]
 fn correct_axis(v: i32, o_q13: i32, g_q24: i32) -> i32 {
     let u = v - (o_q13 >> 8);
     let g_q16 = g_q24 >> 8;

@@ -189,7 +189,7 @@ impl Filter {
 /// One axis's update: both windows gain the sample and lose the one leaving them (masks
 /// say whether they were full). (A function of its own: the ring is indexed through a
 /// reference, not a local array; docs/toolchain.md class 6.)
-#[inline(never)]
+#[inline(always)]
 fn push_axis(a: &mut Axis, next: u8, v: i32, full_short: i32, full_since: i32) {
     let old_short = a.ring[next.wrapping_sub(SHORT as u8) as usize] as i32;
     let old_long = a.ring[next as usize] as i32;
@@ -199,7 +199,7 @@ fn push_axis(a: &mut Axis, next: u8, v: i32, full_short: i32, full_since: i32) {
 }
 
 /// The mean of the last `n` (<= 32) samples of an axis, Q5.
-#[inline(never)]
+#[inline(always)]
 fn short_mean(a: &Axis, n: i32) -> i32 {
     // A Q2 sum of 32 is Q7; fewer: the sum times 2^16 / n, shifted down first to stay
     // inside 32 bits (|sum| < 2^18).
@@ -211,13 +211,13 @@ fn short_mean(a: &Axis, n: i32) -> i32 {
 
 /// The mean of the `n` samples since the last movement (32 < n <= 256), Q5: the Q2 sum
 /// (|sum| < 2^21) shifted down 3, times 2^16 / n (< 2^11), shifted down 10.
-#[inline(never)]
+#[inline(always)]
 fn since_mean(a: &Axis, n: i32) -> i32 {
     ((a.since >> 3) * RECIP_Q16[n as usize]) >> 10
 }
 
 /// Whether the short mean left the mean since the last movement by more than the threshold.
-#[inline(never)]
+#[inline(always)]
 fn moved_axis(a: &Axis, n: i32) -> bool {
     let d = (a.short >> 2) - since_mean(a, n);
     let m = d >> 31;

@@ -203,7 +203,7 @@ impl Event {
 
 /// `new` if it is an event (non-zero), else `old`: by masks, no compare (the M68k backend
 /// clobbered the condition codes of `if ev.is_some()` here; docs/toolchain.md class 1).
-#[inline(never)]
+#[inline(always)]
 fn merge(old: u32, new: u32) -> u32 {
     let mask = ((new | new.wrapping_neg()) as i32 >> 31) as u32;
     (new & mask) | (old & !mask)
@@ -434,9 +434,12 @@ impl Sensing {
         } else {
             let mut q2 = [raw[0] << 2, raw[1] << 2];
             if let (true, Some((pb, pv))) = (cfg.has(opt::CROSSTALK), prev) {
-                if (pb + 1) & 7 == conv.beacon {
-                    crosstalk_q2(&mut q2, &raw, &pv, conv.lit_ticks);
-                }
+                // Only when the previous sample was of the beacon lit just before: a mask,
+                // not a branch (this compare's flags were clobbered on the 68k;
+                // docs/toolchain.md class 1).
+                let d = (((pb + 1) & 7) ^ conv.beacon) as i32;
+                let consecutive = !((d | d.wrapping_neg()) >> 31);
+                crosstalk_q2(&mut q2, &raw, &pv, conv.lit_ticks, consecutive);
             }
             self.filters[b].push(q2, cfg.has(opt::ADAPTIVE_FILTER));
             self.levels[b] = if cfg.has(opt::CURRENT_FEEDBACK) {
@@ -634,7 +637,7 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
 }
 
 /// Whether `p` lies outside the calibrated area (with [`AREA_MARGIN_UM`]).
-#[inline(never)]
+#[inline(always)]
 fn outside(p: [i32; 2], area: &[i32; 4]) -> bool {
     p[0] < area[0] - AREA_MARGIN_UM
         || p[0] > area[1] + AREA_MARGIN_UM
@@ -644,12 +647,12 @@ fn outside(p: [i32; 2], area: &[i32; 4]) -> bool {
 
 /// Removes the previous beacon's residue in the analog filters from a sample (`q2`, Q2
 /// codes; `raw` its codes, `prev` the previous beacon's): v + (v - v_prev) a / (1 - a), for
-/// a sample lit `lit_ticks` after the switch. Writes through a reference (no struct return:
+/// a sample lit `lit_ticks` after the switch; `mask` 0 leaves the sample as it is. Writes through a reference (no struct return:
 /// docs/toolchain.md class 7).
-#[inline(never)]
-fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u16) {
+#[inline(always)]
+fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u16, mask: i32) {
     let k = ((lit_ticks as i32 - 304 + 8) >> 4).clamp(0, CROSSTALK_Q16.len() as i32 - 1);
-    let f = CROSSTALK_Q16[k as usize];
+    let f = CROSSTALK_Q16[k as usize] & mask;
     q2[0] += ((raw[0] - prev[0]) * f) >> 14;
     q2[1] += ((raw[1] - prev[1]) * f) >> 14;
 }
@@ -658,7 +661,7 @@ fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u
 /// proportional to the current), clamped to the driver's range. `recip_q16` is 2^16 /
 /// `s_ref` (the products stay within 32 bits: |s_ref - sum| < 2^11, recip < 2^8,
 /// level < 2^10).
-#[inline(never)]
+#[inline(always)]
 fn feedback_ma(level: i32, sum: i32, s_ref: i32, recip_q16: i32) -> i32 {
     let f_q16 = (s_ref - sum) * recip_q16;
     (level + ((f_q16 * level) >> 16)).clamp(LEVEL_MIN_MA, LEVEL_MAX_MA)
