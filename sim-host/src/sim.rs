@@ -350,7 +350,9 @@ impl Sim {
         let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
         vme_map::init_header(&mut ArrayBus::new(&mut global));
         let plant = Plant::new(cfg.start_rad, cfg.dt_s);
-        let servo_io = ServoIo::new(cfg.start_rad);
+        // The counters are zeroed with the arm at angle 0 before power-up, so they read the
+        // start pose (the servo takes its first latch as absolute: crates/servo).
+        let servo_io = ServoIo::new([0.0, 0.0]);
         let camera = Camera::new(cfg.optics.clone(), cfg.seed);
         if cfg.calibration == Calibration::Model {
             let table = crate::sensing_cal::model_table(&camera);
