@@ -221,6 +221,8 @@ pub trait Optics {
 pub const ADC_CONVERSION_S: f64 = regs::sensing::ADC_CONVERSION_US as f64 * 1e-6;
 /// A/D input span: -10..+10 V.
 pub const ADC_SPAN_V: f64 = 10.0;
+/// Volts per A/D code (4096 codes over the span; exact in binary).
+pub const ADC_V_PER_CODE: f64 = ADC_SPAN_V / 2048.0;
 
 /// The sensing board's private I/O.
 pub struct SensingIo<O: Optics> {

@@ -84,7 +84,8 @@ pub const DRIVER_SPREAD: f64 = 0.15;
 pub const SUM_NOISE_V: f64 = 0.01;
 /// The sum level the noise figure refers to, volts (the sensing firmware's default
 /// reference: [`sensing::DEFAULT_S_REF_CODES`]).
-pub const NOISE_REF_SUM_V: f64 = sensing::DEFAULT_S_REF_CODES as f64 * 10.0 / 2048.0;
+pub const NOISE_REF_SUM_V: f64 =
+    sensing::DEFAULT_S_REF_CODES as f64 * crate::devices::ADC_V_PER_CODE;
 
 /// A time window of a fault on one beacon.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -232,11 +233,11 @@ impl Camera {
         )
     }
 
-    /// Light of beacon `b` at the detector as a sum signal, volts, at drive `ma`: cos^4 of
-    /// the view angle, and only the part of the spot that falls on the detector.
-    pub fn led_sum_v(&self, b: usize, x_m: f64, y_m: f64, ma: f64) -> f64 {
+    /// Light of beacon `b` at (`x_m`, `y_m`), whose spot is at detector position (`xi`,
+    /// `eta`), as a sum signal, volts, at drive `ma`: cos^4 of the view angle, and only the
+    /// part of the spot that falls on the detector.
+    fn led_sum_v(&self, b: usize, x_m: f64, y_m: f64, (xi, eta): (f64, f64), ma: f64) -> f64 {
         let cos2 = HEIGHT_M * HEIGHT_M / (HEIGHT_M * HEIGHT_M + x_m * x_m + y_m * y_m);
-        let (xi, eta) = self.detector(x_m, y_m);
         let on = |c: f64| ((DETECTOR_EDGE - c.abs()) / SPOT_WIDTH + 0.5).clamp(0.0, 1.0);
         SUM_NOMINAL_V * self.efficiency[b] * self.current_ma(b, ma) / NOMINAL_MA
             * cos2
@@ -258,9 +259,13 @@ impl Camera {
     /// The noise-free divider outputs (x, y) for a beacon at (`x_m`, `y_m`) whose light
     /// gives sum signal `s_led_v`, at warmth `w`.
     pub fn divided(&self, x_m: f64, y_m: f64, s_led_v: f64, w: f64) -> (f64, f64) {
-        let (xi, eta) = self.detector(x_m, y_m);
+        self.divided_at(self.detector(x_m, y_m), s_led_v, w)
+    }
+
+    /// [`Self::divided`] for a spot at detector position (`xi`, `eta`).
+    fn divided_at(&self, (xi, eta): (f64, f64), s_led_v: f64, w: f64) -> (f64, f64) {
         let amb = if self.cfg.ambient { 1.0 } else { 0.0 };
-        let s = s_led_v + amb * AMBIENT_SUM_V + SUM_OFFSET_V;
+        let s = self.undrifted_sum_v(s_led_v);
         let dx = s_led_v * xi + DIFF_OFFSET[0] + amb * AMBIENT_DIFF_V[0];
         let dy = s_led_v * eta + DIFF_OFFSET[1] + amb * AMBIENT_DIFF_V[1];
         let div = |d: f64, axis: usize| {
@@ -271,11 +276,15 @@ impl Camera {
         (div(dx, 0), div(dy, 1))
     }
 
+    /// The sum the divider divides by: beacon light, ambient light and the channel offset.
+    fn undrifted_sum_v(&self, s_led_v: f64) -> f64 {
+        let amb = if self.cfg.ambient { 1.0 } else { 0.0 };
+        s_led_v + amb * AMBIENT_SUM_V + SUM_OFFSET_V
+    }
+
     /// The total sum signal for a beacon light `s_led_v` at warmth `w`.
     pub fn sum_v(&self, s_led_v: f64, w: f64) -> f64 {
-        let amb = if self.cfg.ambient { 1.0 } else { 0.0 };
-        ((s_led_v + amb * AMBIENT_SUM_V + SUM_OFFSET_V) * (1.0 + w * DRIFT_SUM_GAIN))
-            .clamp(-RAIL_V, RAIL_V)
+        (self.undrifted_sum_v(s_led_v) * (1.0 + w * DRIFT_SUM_GAIN)).clamp(-RAIL_V, RAIL_V)
     }
 
     /// The settled (noise-free) outputs under drive `d` at `t_s`.
@@ -286,12 +295,13 @@ impl Camera {
             return [RAIL_V, RAIL_V, RAIL_V];
         }
         let hidden = self.cfg.occluded.iter().any(|f| f.covers(d.beacon, t_s));
+        let (x, y) = self.beacons[b].unwrap_or((0.0, 0.0));
+        let spot = self.detector(x, y);
         let s_led = match (d.on && !hidden, self.beacons[b]) {
-            (true, Some((x, y))) => self.led_sum_v(b, x, y, d.level_ma as f64),
+            (true, Some(_)) => self.led_sum_v(b, x, y, spot, d.level_ma as f64),
             _ => 0.0,
         };
-        let (x, y) = self.beacons[b].unwrap_or((0.0, 0.0));
-        let (xv, yv) = self.divided(x, y, s_led, w);
+        let (xv, yv) = self.divided_at(spot, s_led, w);
         [xv, yv, self.sum_v(s_led, w)]
     }
 

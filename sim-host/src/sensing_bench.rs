@@ -10,7 +10,7 @@
 //! compared with the truth once the filter has settled.
 
 use crate::optics::OpticsConfig;
-use crate::sensing_cal::{self, ScanPlan, ScanStats};
+use crate::sensing_cal::{self, hold_at, ScanPlan, ScanStats};
 use crate::sim::{Calibration, Config, Motion, Obstacle, Rng, Sim, WandPath};
 use arm::geometry::Disk;
 use vme_map::records::{beacon_flags as bf, sensing_options as opt, SensingConfig};
@@ -108,24 +108,6 @@ pub fn configure(sim: &mut Sim, options: u32) {
         serial: 1,
     };
     vme_map::SENSING_CONFIG.publish(&mut sim.bus(), &rec);
-}
-
-/// The host as the reflex: holds the arm at `goal` for `seconds`.
-pub fn hold_at(sim: &mut Sim, goal: [f64; 2], seconds: f64, cycle: &mut u32) {
-    let steps = (seconds / sim.cfg.dt_s).round() as usize;
-    for k in 0..steps {
-        if k % 20 == 0 {
-            *cycle += 1;
-            let rec = vme_map::records::ReflexSubgoal {
-                goal1_urad: (goal[0] * 1e6).round() as i32,
-                goal2_urad: (goal[1] * 1e6).round() as i32,
-                flags: 0,
-                cycle: *cycle,
-            };
-            vme_map::REFLEX_SUBGOAL.publish(&mut sim.bus(), &rec);
-        }
-        sim.step();
-    }
 }
 
 /// Places beacon `b` at `p` (metres) in the simulation.

@@ -20,8 +20,8 @@ pub const N: usize = cal::FWD_N as usize;
 pub const PITCH_M: f64 = 0.02;
 /// First grid coordinate: the 0.7 m square is centred under the lens, on the arm's base.
 pub const ORIGIN_M: f64 = -0.35;
-/// Q5 codes per volt of a converter input (4096 codes over 20 V).
-pub const Q5_PER_V: f64 = 4096.0 / 20.0 * 32.0;
+/// Q5 codes per volt of a converter input.
+pub const Q5_PER_V: f64 = 32.0 / crate::devices::ADC_V_PER_CODE;
 
 /// A scan: the signals (Q5 codes about mid-scale) at each grid point, row by row (y outer).
 #[derive(Clone, Debug, PartialEq)]
@@ -44,7 +44,7 @@ pub fn grid_m(i: usize, j: usize) -> [f64; 2] {
 /// holding the firmware's default sum level.
 pub fn model_scan(camera: &Camera) -> Scan {
     let s_ref_codes = sensing::DEFAULT_S_REF_CODES as u32;
-    let s_ref_v = s_ref_codes as f64 * 10.0 / 2048.0;
+    let s_ref_v = s_ref_codes as f64 * crate::devices::ADC_V_PER_CODE;
     // The light that makes the measured sum equal the reference.
     let zero = camera.sum_v(0.0, 0.0);
     let s_led = s_ref_v - zero;
@@ -250,24 +250,21 @@ pub struct ScanStats {
     pub worst_stop_m: f64,
 }
 
-/// Publishes the host's subgoal for the servo (the host plays the reflex board).
-fn command(sim: &mut Sim, goal: [f64; 2], cycle: &mut u32) {
-    *cycle += 1;
-    let rec = ReflexSubgoal {
-        goal1_urad: (goal[0] * 1e6).round() as i32,
-        goal2_urad: (goal[1] * 1e6).round() as i32,
-        flags: 0,
-        cycle: *cycle,
-    };
-    vme_map::REFLEX_SUBGOAL.publish(&mut sim.bus(), &rec);
-}
-
-/// Runs plant steps for `seconds`, keeping the subgoal fresh.
-fn hold(sim: &mut Sim, goal: [f64; 2], cycle: &mut u32, seconds: f64) {
+/// The host as the reflex board: runs plant steps for `seconds`, publishing the subgoal
+/// `goal` (absolute joint angles, rad) every millisecond so the servo finds it fresh.
+/// `cycle` is the subgoal's counter, kept by the caller across calls.
+pub fn hold_at(sim: &mut Sim, goal: [f64; 2], seconds: f64, cycle: &mut u32) {
     let steps = (seconds / sim.cfg.dt_s).round() as usize;
     for k in 0..steps {
         if k % 20 == 0 {
-            command(sim, goal, cycle);
+            *cycle += 1;
+            let rec = ReflexSubgoal {
+                goal1_urad: (goal[0] * 1e6).round() as i32,
+                goal2_urad: (goal[1] * 1e6).round() as i32,
+                flags: 0,
+                cycle: *cycle,
+            };
+            vme_map::REFLEX_SUBGOAL.publish(&mut sim.bus(), &rec);
         }
         sim.step();
     }
@@ -311,7 +308,7 @@ pub fn calibrate(sim: &mut Sim, plan: ScanPlan) -> Result<(Scan, ScanStats), Str
             let mut settled = false;
             let mut last = [f64::NAN; 2];
             for _ in 0..200 {
-                hold(sim, goal, &mut cycle, 0.01);
+                hold_at(sim, goal, 0.01, &mut cycle);
                 let s = servo(sim).ok_or("the servo publishes no state")?;
                 let th = [s.theta1_urad as f64 * 1e-6, s.theta2_urad as f64 * 1e-6];
                 let near = (th[0] - goal[0]).abs() < 50.0 * count_rad[0]
@@ -338,16 +335,16 @@ pub fn calibrate(sim: &mut Sim, plan: ScanPlan) -> Result<(Scan, ScanStats), Str
                 ));
             }
             // Let the filter fill with resting samples, then average its output.
-            hold(
+            hold_at(
                 sim,
                 goal,
-                &mut cycle,
                 sensing::filter::LONG as f64 * 0.002 + 0.01,
+                &mut cycle,
             );
             let mut acc = [0.0; 2];
             let mut truth = [0.0; 2];
             for _ in 0..plan.frames {
-                hold(sim, goal, &mut cycle, 0.002);
+                hold_at(sim, goal, 0.002, &mut cycle);
                 let raw = vme_map::SENSING_RAW
                     .read(&mut sim.bus())
                     .map_err(|_| "the raw table is torn")?

@@ -160,7 +160,7 @@ fn window_run(occlude: bool) -> (Vec<(f64, u32)>, sim_host::sim::Sim) {
     let rest = sensing_cal::ik(0.0, 0.3).unwrap();
     let mut out = Vec::new();
     for _ in 0..(1.6 / 250e-6) as usize {
-        sensing_bench::hold_at(&mut sim, rest, 250e-6, &mut cycle);
+        sensing_cal::hold_at(&mut sim, rest, 250e-6, &mut cycle);
         let t = vme_map::OBJECTS.read(&mut sim.bus()).unwrap().0;
         out.push((sim.t_s(), t.beacons[2].flags));
     }
@@ -253,7 +253,7 @@ fn the_calibration_scan_makes_a_table_the_board_uses() {
         use vme_map::GlobalBus;
         sim.bus().write_u32(vme_map::SENSING_CAL + 4 * i as u32, *w);
     }
-    sensing_bench::hold_at(&mut sim, rest, 0.2, &mut cycle);
+    sensing_cal::hold_at(&mut sim, rest, 0.2, &mut cycle);
     let t = vme_map::OBJECTS.read(&mut sim.bus()).unwrap().0;
     for b in t.beacons {
         assert_eq!(b.flags & bf::VALID, 0);

@@ -79,12 +79,13 @@ impl Board {
             return self.heartbeat;
         };
         // The finished conversion first: a new start clears the status bits.
-        let status = hw.status();
         let sample = hw.sample().map(|s| AdcSample {
             x: s.x,
             y: s.y,
             sum: s.sum,
-            over: status.intersects(AdcStatus::OVER_X | AdcStatus::OVER_Y | AdcStatus::OVER_SUM),
+            over: s
+                .status
+                .intersects(AdcStatus::OVER_X | AdcStatus::OVER_Y | AdcStatus::OVER_SUM),
         });
         if slot.start {
             hw.start_conversion();
@@ -99,7 +100,6 @@ impl Board {
             match vme_map::SERVO_STATE.read(g) {
                 Ok((s, seq)) if seq != 0 => Some(ServoView {
                     theta_urad: [s.theta1_urad, s.theta2_urad],
-                    omega_urad_s: [s.omega1_urad_s, s.omega2_urad_s],
                     loops: s.loops,
                 }),
                 _ => None,

@@ -113,11 +113,6 @@ impl Filter {
         self.count
     }
 
-    /// Samples since the beacon last moved (up to [`LONG`]).
-    pub fn since(&self) -> u16 {
-        self.since
-    }
-
     /// Adds one sample, Q2 codes per axis; with `adaptive`, checks for movement.
     pub fn push(&mut self, q2: [i32; 2], adaptive: bool) {
         // Masks, not branches: all ones when the window was full before this sample.

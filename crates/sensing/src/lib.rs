@@ -92,8 +92,6 @@ pub struct AdcSample {
 pub struct ServoView {
     /// Absolute joint angles.
     pub theta_urad: [i32; 2],
-    /// Joint velocities.
-    pub omega_urad_s: [i32; 2],
     /// The servo's loop counter (advances while the servo runs).
     pub loops: u32,
 }
@@ -111,15 +109,19 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Self {
-        Self {
-            options: opt::DEFAULT,
-            s_ref_codes: DEFAULT_S_REF_CODES,
-            level_ma: regs::sensing::LED_LEVEL_RESET_MA as i32,
-        }
+        Self::DEFAULT
     }
 }
 
 impl Config {
+    /// Everything on, the default sum reference and the thesis's 560 mA when the feedback
+    /// is off: what the board runs with until the host publishes a configuration.
+    pub const DEFAULT: Config = Config {
+        options: opt::DEFAULT,
+        s_ref_codes: DEFAULT_S_REF_CODES,
+        level_ma: regs::sensing::LED_LEVEL_RESET_MA as i32,
+    };
+
     /// The configuration a host record asks for (implausible values replaced by defaults).
     pub fn from_record(r: &SensingConfig) -> Self {
         let d = Self::default();
@@ -298,11 +300,7 @@ impl Sensing {
             levels: [regs::sensing::LED_LEVEL_RESET_MA; BEACONS],
             s_ref_recip_q16: (1 << 16) / DEFAULT_S_REF_CODES,
             filters: [Filter::new(); BEACONS],
-            config: Config {
-                options: opt::DEFAULT,
-                s_ref_codes: DEFAULT_S_REF_CODES,
-                level_ma: regs::sensing::LED_LEVEL_RESET_MA as i32,
-            },
+            config: Config::DEFAULT,
             checker: Checker::new(),
             drift: Drift {
                 o_q13: [0; 2],
@@ -338,11 +336,6 @@ impl Sensing {
     /// Microseconds since the first slot, from the 2 MHz timer (wraps after 71 minutes).
     pub fn now_us(&self) -> u32 {
         self.now_us
-    }
-
-    /// The configuration in use.
-    pub fn config(&self) -> Config {
-        self.config
     }
 
     /// At timer value `timer`: if a slot is due, what to do now (see [`SLOT_EARLY_TICKS`]).
@@ -604,7 +597,6 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
     });
     let servo = (f & 4 != 0).then(|| ServoView {
         theta_urad: [w[5] as i32, w[6] as i32],
-        omega_urad_s: [0, 0],
         loops: w[7],
     });
     let input = Input {
