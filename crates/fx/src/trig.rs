@@ -9,7 +9,7 @@ const ATAN_URAD: [i32; 21] = [
 ];
 
 /// 1 / (CORDIC gain) in Q30: the start vector that makes the rotated vector unit length.
-const INV_GAIN_Q30: i32 = 652_032_874;
+pub const INV_GAIN_Q30: i32 = 652_032_874;
 
 /// Pi in micro-radians.
 pub const PI_URAD: i32 = 3_141_593;
@@ -63,6 +63,50 @@ fn reduce(theta_urad: i32) -> (i32, i32) {
     (z, over | under)
 }
 
+/// Bound on the error of [`atan2_urad`] in micro-radians for vectors of length 2^10 or more
+/// (checked by tests): the table's rounding over 21 rounds plus the last round's step.
+pub const ATAN2_ERR_URAD: i32 = 16;
+
+/// The angle of the vector (`x`, `y`) in micro-radians, in (-pi, pi], and its length
+/// times the CORDIC gain 1.6468 (the length itself is `mag * INV_GAIN_Q30 >> 30`, within
+/// 2e-5 of it), by
+/// integer CORDIC in vectoring mode: 21 rounds of shifts and adds. `x` and `y` must lie
+/// within +-2^29 (the gain must not overflow); (0, 0) has no angle (the result is some
+/// angle of length 0). For the inverse
+/// kinematics the firmware needs without floating point.
+pub fn atan2_urad(y: i32, x: i32) -> (i32, i32) {
+    // Into the right half plane by a quarter turn: (x, y) -> (y, -x) adds pi/2 when y > 0,
+    // (-y, x) subtracts it otherwise. Sign arithmetic, no select (docs/toolchain.md).
+    let left = x >> 31; // -1 when x < 0
+    let up = !(y >> 31) & left; // -1 when x < 0 and y >= 0
+    let down = (y >> 31) & left; // -1 when x < 0 and y < 0
+    let (mut x, mut y, mut z) = (
+        (x & !left) | (y & up) | (-y & down),
+        (y & !left) | (-x & up) | (x & down),
+        ((PI_URAD / 2) & up) - ((PI_URAD / 2) & down),
+    );
+    macro_rules! round {
+        ($($i:literal)*) => {$(
+            // m = -1 rotates clockwise (y >= 0), 0 counter-clockwise: drives y to 0.
+            let m = !(y >> 31);
+            let dx = ((y >> $i) ^ m) - m;
+            let dy = ((x >> $i) ^ m) - m;
+            x -= dx;
+            y += dy;
+            #[allow(unused_assignments)]
+            {
+                z -= (ATAN_URAD[$i] ^ m) - m;
+            }
+        )*};
+    }
+    round!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20);
+    // The last rounds may leave z just beyond +-pi for vectors on the negative x axis.
+    let over = (PI_URAD - z) >> 31;
+    z -= (2 * PI_URAD) & over;
+    let _ = y;
+    (z, x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,6 +152,56 @@ mod tests {
         #[test]
         fn matches_f64(theta in -20_000_000i32..20_000_000) {
             check(theta);
+        }
+    }
+
+    fn check_atan2(y: i32, x: i32) {
+        let (a, m) = atan2_urad(y, x);
+        let want = (y as f64).atan2(x as f64) * 1e6;
+        let mut e = (a as f64 - want).abs();
+        if e > 3e6 {
+            e = (e - 2e6 * core::f64::consts::PI).abs();
+        }
+        assert!(
+            e <= ATAN2_ERR_URAD as f64,
+            "atan2({y}, {x}) = {a}, want {want:.1}"
+        );
+        let len = (m as f64) * INV_GAIN_Q30 as f64 / (1u64 << 30) as f64;
+        let r = (x as f64).hypot(y as f64);
+        assert!(
+            (len - r).abs() <= 4.0 + r * 2e-5,
+            "|({x}, {y})| = {len}, want {r}"
+        );
+        assert!(
+            a > -PI_URAD && a <= PI_URAD,
+            "atan2({y}, {x}) = {a} outside (-pi, pi]"
+        );
+    }
+
+    #[test]
+    fn atan2_axes_and_diagonals() {
+        let k = 300_000;
+        for (y, x) in [
+            (0, k),
+            (k, 0),
+            (0, -k),
+            (-k, 0),
+            (k, k),
+            (-k, -k),
+            (k, -k),
+            (-k, k),
+            (1, -k),
+            (-1, -k),
+        ] {
+            check_atan2(y, x);
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn atan2_matches_f64(y in -(1i32 << 29)..(1 << 29), x in -(1i32 << 29)..(1 << 29)) {
+            prop_assume!((x as f64).hypot(y as f64) >= 1024.0);
+            check_atan2(y, x);
         }
     }
 }
