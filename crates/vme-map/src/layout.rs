@@ -9,15 +9,15 @@ use crate::board::{BoardId, BoardState, FaultCode, FaultRecord, StatusWord};
 use crate::bus::GlobalBus;
 use crate::record::{Record, SeqLock};
 use crate::records::{
-    cal, HostCommand, ObjectTable, PlannerGoal, RawTable, ReflexSubgoal, SensingConfig,
-    SensingDrift, ServoState, WorkEntry, WORK_ENTRIES,
+    cal, HostCommand, ObjectTable, PlannerGoal, RawTable, ReflexStatus, ReflexSubgoal,
+    SensingConfig, SensingDrift, ServoState, WorkEntry, WORK_ENTRIES,
 };
 use crate::GLOBAL_RAM_SIZE;
 
 /// Value of the header's magic word: ASCII "NW87" (Newman 1987).
 pub const MAGIC: u32 = 0x4E57_3837;
 /// Version of this layout; bumped by every incompatible change.
-pub const LAYOUT_VERSION: u32 = 3;
+pub const LAYOUT_VERSION: u32 = 4;
 
 /// Header: magic word (written by the host at power-up).
 pub const HEADER_MAGIC: u32 = 0x0000;
@@ -141,6 +141,14 @@ pub const SENSING_CONFIG: SeqLock<SensingConfig> = SeqLock::at(0x0660);
 pub const SENSING_DRIFT: SeqLock<SensingDrift> = SeqLock::at(0x0678);
 /// The sensing board's raw signal table (what calibration records).
 pub const SENSING_RAW: SeqLock<RawTable> = SeqLock::at(0x0690);
+/// What the reflex's last pass did (writer: reflex).
+pub const REFLEX_STATUS: SeqLock<ReflexStatus> = SeqLock::at(0x0720);
+/// Obstacle radii the host knows (the thesis's obstacles were cylinders of known size):
+/// one word per C-space work-list entry, micrometres, 0 = the default 2-inch cylinder
+/// (writer: host; single words, no lock).
+pub const OBSTACLE_RADII: u32 = 0x0740;
+/// Words of [`OBSTACLE_RADII`].
+pub const OBSTACLE_RADII_WORDS: u32 = WORK_ENTRIES as u32;
 
 /// C-space work list: the cursor (thesis line 1225's semaphore), the next entry to transform;
 /// changed only with `CAS.L` by the C-space boards (`crates/cspace`, module `worklist`).
@@ -242,7 +250,7 @@ const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Re
 }
 
 /// Every region of global RAM in address order.
-pub const LAYOUT: [Region; 15] = [
+pub const LAYOUT: [Region; 17] = [
     Region {
         name: "header",
         offset: HEADER_MAGIC,
@@ -277,6 +285,18 @@ pub const LAYOUT: [Region; 15] = [
         Writer::Board(BoardId::Sensing),
     ),
     seq("sensing_raw", SENSING_RAW, Writer::Board(BoardId::Sensing)),
+    seq(
+        "reflex_status",
+        REFLEX_STATUS,
+        Writer::Board(BoardId::Reflex),
+    ),
+    Region {
+        name: "obstacle_radii",
+        offset: OBSTACLE_RADII,
+        size: 4 * OBSTACLE_RADII_WORDS,
+        writer: Writer::Host,
+        seqlock: false,
+    },
     Region {
         name: "work_list",
         offset: WORK_CURSOR,
@@ -347,6 +367,7 @@ const _: () = assert!(SeqLock::<HostCommand>::SIZE == 20);
 const _: () = assert!(SeqLock::<SensingConfig>::SIZE == 20);
 const _: () = assert!(SeqLock::<SensingDrift>::SIZE == 24);
 const _: () = assert!(SeqLock::<RawTable>::SIZE == 136);
+const _: () = assert!(SeqLock::<ReflexStatus>::SIZE == 24);
 const _: () = assert!(WORK_ENTRY_BYTES == 32);
 const _: () = assert!(CSPACE_MAP_BYTES == 0x1_0000);
 const _: () = assert!(LOG_ENTRIES_OFFSET + LOG_ENTRIES * LOG_ENTRY_BYTES <= LOG_RING_STRIDE);

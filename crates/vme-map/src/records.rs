@@ -301,6 +301,53 @@ record! {
     }
 }
 
+/// Bits of [`ReflexSubgoal::flags`] (thesis ch. V; `crates/reflex` sets them, the planner
+/// and the host read them).
+pub mod reflex_flags {
+    /// The subgoal is the goal (both axes).
+    pub const AT_GOAL: u32 = 1 << 0;
+    /// Axis 1 stopped at an obstacle wall.
+    pub const BLOCKED1: u32 = 1 << 1;
+    /// Axis 2 stopped at an obstacle wall.
+    pub const BLOCKED2: u32 = 1 << 2;
+    /// Margins grown with speed reached an obstacle: braking within the arrest region.
+    pub const BRAKING: u32 = 1 << 3;
+    /// An obstacle covers the arm or its arrest region: heading for free space.
+    pub const ESCAPING: u32 = 1 << 4;
+    /// At rest short of the goal with nowhere safe to go toward it.
+    pub const STALLED: u32 = 1 << 5;
+    /// Covered by an obstacle with no free place within reach: holding.
+    pub const TRAPPED: u32 = 1 << 6;
+    /// Holding at the arrest point because an input is bad (a fault is recorded).
+    pub const HOLD: u32 = 1 << 7;
+    /// The goal is the planner's.
+    pub const FROM_PLANNER: u32 = 1 << 8;
+    /// The goal is the wand's.
+    pub const FROM_WAND: u32 = 1 << 9;
+    /// The arm is at the goal and at rest.
+    pub const ARRIVED: u32 = 1 << 10;
+    /// Holding after power-up until the map and the positions are first good (no fault).
+    pub const WAITING: u32 = 1 << 11;
+}
+
+record! {
+    /// What the reflex's last pass did (written by the reflex board; for the host's monitor
+    /// and the benches).
+    pub struct ReflexStatus {
+        /// Link 1 goal in use (absolute; the wand's is the pose nearest the arm).
+        pub goal1_urad: i32,
+        /// Link 2 goal in use.
+        pub goal2_urad: i32,
+        /// The window tested: bytes first theta1 pixel, theta1 pixels, first theta2 pixel,
+        /// theta2 pixels (map indices, most significant byte first; 0 pixels = 256).
+        pub window: u32,
+        /// Pixel words read in the pass.
+        pub tests: u32,
+        /// Servo-clock time since the previous pass.
+        pub dt_us: u32,
+    }
+}
+
 record! {
     /// The planner's goal for the reflex (written by the planner board).
     pub struct PlannerGoal {
