@@ -5,9 +5,11 @@
 //! records the new position and releases the entry. So N boards share the transforms evenly
 //! whatever moves, and a board that stops only slows the map down.
 //!
-//! Moving obstacles are drawn swept ("blurred", lines ~1236-1242) over [`LOOKAHEAD_MS`]
-//! along their measured velocity: the image covers wherever the obstacle can be until the
-//! next refresh. An obstacle whose beacon turns invalid keeps its last image.
+//! Moving obstacles (those the sensing board flags moving) are drawn swept ("blurred", lines
+//! ~1236-1242) over [`LOOKAHEAD_MS`] along their measured velocity: the image covers wherever
+//! the obstacle can be until the next refresh, and where it already is while the sensing
+//! board's filter still reports where it was. An obstacle whose beacon turns invalid keeps
+//! its last image.
 
 use crate::{apply, images, BusCanvas, Disk, Error, Flags, Op, POLAR_MARGIN_UM};
 use vme_map::layout::{work_entry, WORK_CURSOR};
@@ -18,10 +20,23 @@ use vme_map::GlobalBus;
 /// The beacons whose obstacles the C-space boards transform (thesis ch. II.3: five obstacles
 /// and the instructional robot), entry `i` for beacon `OBSTACLE_BEACONS[i]`.
 pub const OBSTACLE_BEACONS: [u32; 6] = [0, 1, 2, 3, 4, 7];
-/// Radius the boards give every obstacle: the thesis's 2-inch cylinders (ch. IV section 5).
+/// Radius the boards give an obstacle whose radius the host did not write: the thesis's
+/// 2-inch cylinders (ch. IV section 5).
 pub const OBSTACLE_R_UM: i32 = 25_400;
-/// How far ahead a moving obstacle's image is swept.
-pub const LOOKAHEAD_MS: i32 = 40;
+
+/// The radius of entry `i`'s obstacle: the host's word in `OBSTACLE_RADII`, or
+/// [`OBSTACLE_R_UM`] where it wrote none.
+#[inline(never)]
+pub fn radius(g: &mut (impl GlobalBus + ?Sized), i: u32) -> i32 {
+    let r = g.read_u32(vme_map::layout::OBSTACLE_RADII + 4 * i) as i32;
+    // Sign arithmetic, no select (docs/toolchain.md): d = -1 when r == 0.
+    let d = ((r | r.wrapping_neg()) >> 31) ^ -1;
+    r | (OBSTACLE_R_UM & d)
+}
+/// How far ahead a moving obstacle's image is swept: the sensing board's filter delay
+/// (positions of obstacles moving at 0.1-0.3 m/s lag the truth by 50-75 ms, measured by the
+/// reflex campaign's moving scenes) plus the map's refresh and the reflex's reaction.
+pub const LOOKAHEAD_MS: i32 = 120;
 /// A move smaller than this (and an unchanged sweep) is not redrawn.
 pub const MOVE_UM: i32 = 500;
 /// Longest sweep drawn, per axis (an obstacle faster than 2.5 m/s is drawn as if at 2.5 m/s
@@ -228,12 +243,17 @@ fn job<B: GlobalBus + ?Sized>(g: &mut B, i: u32, b: &Beacon, e: &mut WorkEntry) 
     }
     let drawn = e.state & DRAWN != 0;
     let (sx, sy, clamped) = sweep(e, b.x_um, b.y_um, b.t_us);
+    // Only an obstacle the sensing board sees moving is swept: a resting one's position
+    // noise over a 2 ms frame would otherwise sweep it by millimetres each redraw.
+    let moving = -(((b.flags & beacon_flags::MOVING) >> 7) as i32);
+    let (sx, sy) = (sx & moving, sy & moving);
     out.clamped = clamped;
     if !needs_redraw(e, b) {
         return out;
     }
     // New image first, then the old one goes: no void ever opens.
-    match draw(g, b.x_um, b.y_um, (sx, sy), OBSTACLE_R_UM, Op::Draw) {
+    let r_um = radius(g, i);
+    match draw(g, b.x_um, b.y_um, (sx, sy), r_um, Op::Draw) {
         Ok(f) => {
             out.flags.merge(f);
             if drawn {
@@ -244,7 +264,7 @@ fn job<B: GlobalBus + ?Sized>(g: &mut B, i: u32, b: &Beacon, e: &mut WorkEntry) 
             }
             e.x_um = b.x_um;
             e.y_um = b.y_um;
-            e.r_um = OBSTACLE_R_UM;
+            e.r_um = r_um;
             e.generation = b.t_us;
             e.reserved = ((sx as u32) << 16) | (sy as u32 & 0xFFFF);
             e.beacon = OBSTACLE_BEACONS[i as usize];
