@@ -6,8 +6,8 @@ use std::fmt::Write;
 use vme_map::layout::{BoardSlot, Writer, LAYOUT};
 use vme_map::record::{Record, SeqLock};
 use vme_map::records::{
-    cal, HostCommand, ObjectTable, PlannerGoal, RawTable, ReflexSubgoal, SensingConfig,
-    SensingDrift, ServoState, WorkEntry,
+    cal, HostCommand, ObjectTable, PlannerGoal, RawTable, ReflexStatus, ReflexSubgoal,
+    SensingConfig, SensingDrift, ServoState, WorkEntry,
 };
 use vme_map::{BoardId, FaultRecord, GLOBAL_RAM_BASE};
 
@@ -93,6 +93,7 @@ pub fn memory_map() -> String {
     fields::<SensingConfig>(&mut o, "sensing_config", vme_map::SENSING_CONFIG);
     fields::<SensingDrift>(&mut o, "sensing_drift", vme_map::SENSING_DRIFT);
     fields::<RawTable>(&mut o, "sensing_raw", vme_map::SENSING_RAW);
+    fields::<ReflexStatus>(&mut o, "reflex_status", vme_map::REFLEX_STATUS);
     writeln!(
         o,
         "\n#### `work_list` entry {} bytes, {} entries from `{:#06x}`\n",

@@ -1,18 +1,54 @@
-//! The reflex board: the I/O shell that wires its private registers and global RAM to its
-//! logic (thesis ch. V (reflexes); design.md section 3). The logic's `step` arrives with issue 8;
-//! until then the board boots, checks the global RAM header and publishes its heartbeat and
-//! status. The same code runs in the image (`src/main.rs`, volatile MMIO) and in the
-//! simulator's native mode (device models behind [`IoBus`]).
+//! The reflex board: wires global RAM to the reflex control of `crates/reflex` (thesis ch. V).
+//! Each main-loop pass reads the servo's state, the goal (the planner's record, or the wand's
+//! beacon when no planner publishes), the freshness of the map and of the obstacle positions,
+//! tests the lookahead window in the C-space map, and publishes the reflex subgoal for the
+//! servo and the pass's status. The same code runs in the image (`src/main.rs`, volatile
+//! MMIO) and in the simulator's native mode.
+//!
+//! Fail-safe (`crates/reflex`, module `health`): a stale or torn map, stale obstacle
+//! positions, a stale or torn servo state or a planner that stopped make the reflex hold the
+//! arm at its arrest point and record the fault (state `Degraded`).
 #![no_std]
 #![deny(missing_docs)]
 
 use board_shell::Shell;
+use cspace::worklist::{self, OBSTACLE_BEACONS};
+use reflex::health::{EntryView, HealthInput, Problem, ENTRIES};
+use reflex::window::Map;
+use reflex::{Fault, GoalInput, Input, Reflex, ServoView};
 use regs::IoBus;
-use vme_map::{BoardId, BoardState, GlobalBus};
+use vme_map::layout::{cspace_counter, CSPACE_SIDE, CSPACE_STRIPES};
+use vme_map::record::Record;
+use vme_map::records::{
+    beacon_flags, beacon_index, ObjectTable, PlannerGoal, ReflexStatus, ReflexSubgoal, ServoState,
+};
+use vme_map::{BoardId, BoardSlot, BoardState, FaultCode, GlobalBus};
+
+/// Words of the servo state record.
+const SERVO_WORDS: usize = ServoState::WORDS as usize;
+/// Words of the object table.
+const OBJECT_WORDS: usize = ObjectTable::WORDS as usize;
+/// Words of the planner's goal record.
+const PLANNER_WORDS: usize = PlannerGoal::WORDS as usize;
 
 /// The reflex board's state between main-loop passes.
+///
+/// The records it reads are kept as raw words in the board (read with
+/// `SeqLock::read_raw`, generic over the bus: decoding them through the records' dynamic
+/// closures cost 50,000 cycles a pass on the 68020) and read through references (a
+/// 136-byte table in an `Option` on the stack was misread on the 68k, docs/toolchain.md).
 pub struct Board {
     shell: Shell,
+    reflex: Reflex,
+    cycle: u32,
+    /// The servo state's words.
+    servo_w: [u32; SERVO_WORDS],
+    /// The object table's words as last read: frame, then x, y, t_us, flags per beacon.
+    objects_w: [u32; OBJECT_WORDS],
+    /// Whether this pass's read of the object table was whole.
+    objects_ok: bool,
+    /// The planner goal's words.
+    planner_w: [u32; PLANNER_WORDS],
 }
 
 impl Default for Board {
@@ -21,11 +57,56 @@ impl Default for Board {
     }
 }
 
+/// The C-space map in global RAM, read a word per pixel.
+pub struct BusMap<'a, G: GlobalBus>(pub &'a mut G);
+
+impl<G: GlobalBus> Map for BusMap<'_, G> {
+    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
+        let mut a = cspace_counter(i1, i2, 0);
+        let mut acc = 0;
+        for _ in 0..n {
+            acc |= self.0.read_u32(a);
+            a += 4;
+        }
+        acc
+    }
+    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        let mut a = cspace_counter(i1, i2, 0);
+        let mut acc = 0;
+        for _ in 0..n {
+            acc |= self.0.read_u32(a);
+            a += 4 * CSPACE_SIDE;
+        }
+        acc
+    }
+    fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
+        let mut a = CSPACE_STRIPES + 4 * i1;
+        let mut acc = 0;
+        for _ in 0..n {
+            acc |= self.0.read_u32(a);
+            a += 4;
+        }
+        acc
+    }
+}
+
+/// Word `w` (0 x, 1 y, 2 t_us, 3 flags) of beacon `b` in the object table's words.
+#[inline(always)]
+fn beacon_word(t: &[u32; OBJECT_WORDS], b: usize, w: usize) -> u32 {
+    t[1 + 4 * b + w]
+}
+
 impl Board {
     /// A fresh board.
     pub const fn new() -> Self {
         Self {
             shell: Shell::new(BoardId::Reflex),
+            reflex: Reflex::new(reflex::Config::DEFAULT),
+            cycle: 0,
+            servo_w: [0; SERVO_WORDS],
+            objects_w: [0; OBJECT_WORDS],
+            objects_ok: false,
+            planner_w: [0; PLANNER_WORDS],
         }
     }
 
@@ -40,10 +121,192 @@ impl Board {
         self.shell.boot(g, || {});
     }
 
-    /// One pass of the main loop. Returns the new heartbeat.
-    pub fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) -> u32 {
+    /// One pass of the main loop. Returns the new heartbeat. Generic over the bus so the
+    /// image's record and map reads are inlined volatile words.
+    pub fn poll<G: GlobalBus>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
-        self.shell.end(g, BoardState::Running)
+        let servo = match vme_map::SERVO_STATE.read_raw(g, &mut self.servo_w) {
+            // The servo has not published yet: nothing to do.
+            Ok(0) => return self.shell.end(g, BoardState::Running),
+            Ok(_) => Some(servo_view(&self.servo_w)),
+            Err(_) => None,
+        };
+        // Straight into the board's copy: a torn read leaves it mixed, but then `objects_ok`
+        // is false and nothing but the lag of entries that are not tracked looks at it.
+        self.objects_ok = vme_map::OBJECTS.read_raw(g, &mut self.objects_w).is_ok();
+        let ok = self.objects_ok;
+        let goal = match vme_map::PLANNER_GOAL.read_raw(g, &mut self.planner_w) {
+            Ok(0) => wand(&self.objects_w, ok),
+            Ok(_) => GoalInput::Planner {
+                goal_urad: [self.planner_w[0] as i32, self.planner_w[1] as i32],
+                cycle: self.planner_w[4],
+            },
+            // The planner published once and now reads torn: keep the last goal.
+            Err(_) => GoalInput::None,
+        };
+        let mut health = HealthInput {
+            cspace_heartbeats: [0; 3],
+            objects_frame: self.objects_w[0],
+            objects_torn: !ok,
+            entries: [EntryView::default(); ENTRIES],
+        };
+        fill_health(&mut health, g, &self.objects_w, ok);
+        let obstacles_moving = ok && moving(&self.objects_w);
+        let out = self.reflex.step(
+            &Input {
+                servo,
+                goal,
+                health,
+                obstacles_moving,
+            },
+            &mut BusMap(&mut *g),
+        );
+        if let Some(sub) = out.subgoal_urad {
+            self.cycle = self.cycle.wrapping_add(1);
+            let span = |s: (i32, i32)| {
+                let n = (s.1 - s.0 + 1).clamp(1, CSPACE_SIDE as i32) as u32;
+                (((s.0 as u32) & (CSPACE_SIDE - 1)) << 8) | (n & 0xFF)
+            };
+            publish(
+                g,
+                &[sub[0] as u32, sub[1] as u32, out.flags, self.cycle],
+                &[
+                    out.goal_urad[0] as u32,
+                    out.goal_urad[1] as u32,
+                    (span(out.window[0]) << 16) | span(out.window[1]),
+                    out.tests,
+                    out.dt_us,
+                ],
+            );
+        }
+        if let Some(f) = out.new_fault {
+            let (code, at) = match f {
+                Fault::ServoStale => (FaultCode::StaleHeartbeat, vme_map::SERVO_STATE.offset()),
+                Fault::ServoTorn => (FaultCode::TornRecord, vme_map::SERVO_STATE.offset()),
+                Fault::PlannerStale => (FaultCode::StaleHeartbeat, vme_map::PLANNER_GOAL.offset()),
+                Fault::Input(Problem::MapStale) | Fault::Input(Problem::MapLag) => {
+                    (FaultCode::StaleHeartbeat, vme_map::layout::CSPACE_MAP)
+                }
+                Fault::Input(Problem::MapTorn) => {
+                    (FaultCode::TornRecord, vme_map::layout::WORK_LIST)
+                }
+                Fault::Input(Problem::ObjectsStale) => {
+                    (FaultCode::StaleHeartbeat, vme_map::OBJECTS.offset())
+                }
+            };
+            self.shell.life().degraded(g, code, at);
+        }
+        let state = if self.reflex.holding() {
+            BoardState::Degraded
+        } else {
+            BoardState::Running
+        };
+        self.shell.end(g, state)
+    }
+}
+
+/// The servo state's words as the reflex uses them.
+#[inline(never)]
+fn servo_view(w: &[u32; SERVO_WORDS]) -> ServoView {
+    ServoView {
+        theta_urad: [w[0] as i32, w[1] as i32],
+        omega_urad_s: [w[2] as i32, w[3] as i32],
+        arrest_urad: [w[4] as i32, w[5] as i32],
+        t_us: w[8],
+        loops: w[9],
+    }
+}
+
+/// Publishes the subgoal (`sub`: `ReflexSubgoal`'s words) and the pass's status (`status`:
+/// `ReflexStatus`'s words).
+#[inline(never)]
+fn publish<G: GlobalBus>(
+    g: &mut G,
+    sub: &[u32; ReflexSubgoal::WORDS as usize],
+    status: &[u32; ReflexStatus::WORDS as usize],
+) {
+    vme_map::REFLEX_SUBGOAL.publish_raw(g, sub);
+    vme_map::REFLEX_STATUS.publish_raw(g, status);
+}
+
+/// The wand's position as the goal, if the table is whole and the wand valid.
+#[inline(never)]
+fn wand(t: &[u32; OBJECT_WORDS], ok: bool) -> GoalInput {
+    let w = beacon_index::WAND;
+    if ok && beacon_word(t, w, 3) & beacon_flags::VALID != 0 {
+        GoalInput::Wand {
+            x_um: beacon_word(t, w, 0) as i32,
+            y_um: beacon_word(t, w, 1) as i32,
+        }
+    } else {
+        GoalInput::None
+    }
+}
+
+/// Whether the sensing board flags any valid obstacle beacon as moving.
+#[inline(never)]
+fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
+    let mut any = 0;
+    let mut i = 0;
+    while i < OBSTACLE_BEACONS.len() {
+        let f = beacon_word(t, OBSTACLE_BEACONS[i] as usize, 3);
+        any |= f & (f << 7) & beacon_flags::MOVING;
+        i += 1;
+    }
+    any != 0
+}
+
+/// The C-space heartbeats and the work list into `h`, each entry against its obstacle's
+/// sensed position in `objects`. Filled through a reference in a non-inlined function: a
+/// local array filled in a loop lost its index on the 68k (docs/toolchain.md, class 6).
+#[inline(never)]
+fn fill_health<G: GlobalBus>(
+    h: &mut HealthInput,
+    g: &mut G,
+    objects: &[u32; OBJECT_WORDS],
+    ok: bool,
+) {
+    h.cspace_heartbeats[0] = g.read_u32(BoardSlot::of(BoardId::Cspace0).heartbeat());
+    h.cspace_heartbeats[1] = g.read_u32(BoardSlot::of(BoardId::Cspace1).heartbeat());
+    h.cspace_heartbeats[2] = g.read_u32(BoardSlot::of(BoardId::Cspace2).heartbeat());
+    let mut i = 0;
+    while i < ENTRIES {
+        h.entries[i] = entry_view(g, i as u32, objects, ok);
+        i += 1;
+    }
+}
+
+/// Work-list entry `i` as the reflex's health monitor sees it: the words it needs, read
+/// one by one (claim, x, y, state of `WorkEntry`).
+#[inline(never)]
+fn entry_view<G: GlobalBus>(
+    g: &mut G,
+    i: u32,
+    objects: &[u32; OBJECT_WORDS],
+    ok: bool,
+) -> EntryView {
+    let base = vme_map::layout::work_entry(i);
+    let claim = g.read_u32(base);
+    let (ex, ey) = (g.read_u32(base + 8) as i32, g.read_u32(base + 12) as i32);
+    let state = g.read_u32(base + 20);
+    let b = OBSTACLE_BEACONS[i as usize] as usize;
+    let valid = ok && beacon_word(objects, b, 3) & beacon_flags::VALID != 0;
+    // The host wrote a radius for this entry: the obstacle exists, seen or not. One that
+    // was never drawn leaves the map without it (an obstacle no sensor sees is not free
+    // space).
+    let exists = g.read_u32(vme_map::layout::OBSTACLE_RADII + 4 * i) != 0;
+    let drawn = state & worklist::DRAWN != 0;
+    let (bx, by) = (
+        beacon_word(objects, b, 0) as i32,
+        beacon_word(objects, b, 1) as i32,
+    );
+    let lag = (bx - ex).abs().max((by - ey).abs());
+    EntryView {
+        claim,
+        state,
+        tracked: valid && drawn,
+        undrawn: (valid || exists) && !drawn,
+        lag_um: lag,
     }
 }
 

@@ -18,6 +18,36 @@ fn main() -> ! {
     }
 }
 
+/// Test probe (never called by the board): runs a fresh reflex over `n` passes of scripted
+/// inputs (`reflex::script::IN_WORDS` words each) against the C-space map in global RAM and
+/// writes `reflex::script::OUT_WORDS` words per pass to `out`. The system tests compare it
+/// with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_run"]
+pub extern "C" fn reflex_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{IN_WORDS, OUT_WORDS};
+    static mut REFLEX: reflex::Reflex = reflex::Reflex::new(reflex::Config::DEFAULT);
+    // SAFETY: the probe is the only code that touches REFLEX, and runs once per call.
+    let r = unsafe { &mut *core::ptr::addr_of_mut!(REFLEX) };
+    *r = reflex::Reflex::new(reflex::Config::DEFAULT);
+    // SAFETY: the probe runs on the reflex image, where global RAM is mapped.
+    let mut g = unsafe { MmioGlobal::new() };
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes IN_WORDS n input words and room for OUT_WORDS n outputs,
+        // word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(inputs.add(IN_WORDS * i as usize) as *const [u32; IN_WORDS]),
+                &mut *(out.add(OUT_WORDS * i as usize) as *mut [i32; OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_pass(r, w, &mut board_reflex::BusMap(&mut g), o);
+        i += 1;
+    }
+    0
+}
+
 fn safe_stop() {
     // SAFETY: called by the runtime on this board, where the private I/O is mapped.
     board_reflex::safe(&mut unsafe { MmioIo::new() });

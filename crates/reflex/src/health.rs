@@ -1,0 +1,190 @@
+//! Whether the reflex's inputs can be believed (design.md section 5; issue 8's fail-safe):
+//! a map that no C-space board keeps up to date, a map an update was abandoned in the middle
+//! of, and obstacle positions that stopped arriving all make the reflex stop the arm at its
+//! arrest point. Missing data is never free space.
+//!
+//! Time is the servo board's clock (`ServoState::t_us`), the only clock the reflex sees.
+
+use crate::masks::{lt, pick};
+
+/// A C-space map no board has worked on for this long is stale.
+pub const MAP_STALE_US: u32 = 30_000;
+/// A work-list entry claimed, unchanged, for this long was abandoned mid-update: the map is
+/// torn (an image half drawn).
+pub const MAP_TORN_US: u32 = 20_000;
+/// An obstacle whose drawn image lies this far from its sensed position ...
+pub const LAG_UM: i32 = 15_000;
+/// ... for this long means the map does not show where the obstacle is.
+pub const LAG_US: u32 = 100_000;
+/// An object table whose frame counter stood still this long is stale.
+pub const OBJECTS_STALE_US: u32 = 30_000;
+/// After power-up the inputs may take this long to become good before that is a fault
+/// (the arm holds meanwhile).
+pub const STARTUP_US: u32 = 500_000;
+
+/// The C-space work list as the reflex sees it, per entry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EntryView {
+    /// The entry's claim word (0 = free).
+    pub claim: u32,
+    /// The entry's state word (changes with every redraw).
+    pub state: u32,
+    /// Whether an image is drawn and its obstacle's beacon is valid.
+    pub tracked: bool,
+    /// The obstacle exists (its beacon is valid, or the host configured it) but no image is
+    /// drawn.
+    pub undrawn: bool,
+    /// Largest axis distance between the drawn image's position and the sensed one.
+    pub lag_um: i32,
+}
+
+/// Number of work-list entries watched (the obstacle beacons).
+pub const ENTRIES: usize = 6;
+
+/// What the reflex reads about its inputs' freshness each pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HealthInput {
+    /// Heartbeats of the three C-space board slots (a slot without a board stays 0).
+    pub cspace_heartbeats: [u32; 3],
+    /// The object table's frame counter (ignored when `objects_torn`).
+    pub objects_frame: u32,
+    /// The object table read torn.
+    pub objects_torn: bool,
+    /// The work list.
+    pub entries: [EntryView; ENTRIES],
+}
+
+/// What is wrong with the inputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Problem {
+    /// No C-space board is running.
+    MapStale,
+    /// An obstacle's image lags its sensed position (or was never drawn).
+    MapLag,
+    /// An update of the map was abandoned half done.
+    MapTorn,
+    /// The obstacle positions stopped arriving (or read torn throughout).
+    ObjectsStale,
+}
+
+/// Tracks the inputs' freshness over passes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Monitor {
+    hb: [u32; 3],
+    hb_since_us: u32,
+    frame: u32,
+    /// A frame counter has been read (-1).
+    frame_had: i32,
+    frame_since_us: u32,
+    entries: [EntryView; ENTRIES],
+    claimed_since_us: [u32; ENTRIES],
+    lag_since_us: [u32; ENTRIES],
+    started: bool,
+    /// A C-space heartbeat and the frame counter have been seen to change (-1): until then
+    /// the map and the positions count as stale.
+    hb_seen: i32,
+    frame_seen: i32,
+    /// Some entry lags or is undrawn right now (not yet for long): -1.
+    behind_now: i32,
+}
+
+impl Monitor {
+    /// Whether, at the last [`Monitor::observe`], some obstacle's image lagged its sensed
+    /// position or was missing (even if not yet for long enough to be a problem): before
+    /// the inputs were first good, the arm waits for this to clear too.
+    pub fn behind(&self) -> bool {
+        self.behind_now != 0
+    }
+
+    /// A monitor that has seen nothing.
+    pub const fn new() -> Self {
+        Self {
+            hb: [0; 3],
+            hb_since_us: 0,
+            frame: 0,
+            frame_had: 0,
+            frame_since_us: 0,
+            entries: [EntryView {
+                claim: 0,
+                state: 0,
+                tracked: false,
+                undrawn: false,
+                lag_um: 0,
+            }; ENTRIES],
+            claimed_since_us: [0; ENTRIES],
+            lag_since_us: [0; ENTRIES],
+            started: false,
+            hb_seen: 0,
+            frame_seen: 0,
+            behind_now: 0,
+        }
+    }
+
+    /// Takes one pass's readings `h` at `now_us` (servo clock, wrapping) and says what, if
+    /// anything, is wrong.
+    pub fn observe(&mut self, h: &HealthInput, now_us: u32) -> Option<Problem> {
+        if !self.started {
+            self.started = true;
+            self.hb = h.cspace_heartbeats;
+            self.hb_since_us = now_us;
+            self.frame = h.objects_frame;
+            self.frame_had = -(!h.objects_torn as i32);
+            self.frame_since_us = now_us;
+            self.entries = h.entries;
+            self.claimed_since_us = [now_us; ENTRIES];
+            self.lag_since_us = [now_us; ENTRIES];
+        }
+        // Decisions as masks (-1 = yes), not booleans (docs/toolchain.md).
+        let now = now_us as i32;
+        let older = |since: u32, limit: u32| {
+            lt(limit as i32, now_us.wrapping_sub(since).min(1 << 30) as i32)
+        };
+        let since = |m: i32, since: u32| pick(m, now, since as i32) as u32;
+        let (a, b) = (h.cspace_heartbeats, self.hb);
+        let beat = nonzero((a[0] ^ b[0]) | (a[1] ^ b[1]) | (a[2] ^ b[2]));
+        self.hb = a;
+        self.hb_since_us = since(beat, self.hb_since_us);
+        self.hb_seen |= beat;
+        let ok = -(!h.objects_torn as i32);
+        let new = nonzero(h.objects_frame ^ self.frame) & ok;
+        self.frame_seen |= new & self.frame_had;
+        self.frame_had |= ok;
+        self.frame = pick(ok, h.objects_frame as i32, self.frame as i32) as u32;
+        self.frame_since_us = since(new, self.frame_since_us);
+        let mut torn = 0;
+        let mut lag = 0;
+        let mut behind_now = 0;
+        for (i, e) in h.entries.iter().enumerate() {
+            let old = self.entries[i];
+            let free = nonzero(e.claim) ^ -1;
+            let changed = nonzero((e.claim ^ old.claim) | (e.state ^ old.state));
+            self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
+            let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
+            self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
+            behind_now |= behind;
+            torn |= older(self.claimed_since_us[i], MAP_TORN_US);
+            lag |= older(self.lag_since_us[i], LAG_US);
+            self.entries[i] = *e;
+        }
+        self.behind_now = behind_now;
+        let stale = !self.hb_seen | older(self.hb_since_us, MAP_STALE_US);
+        let objects = !self.frame_seen | older(self.frame_since_us, OBJECTS_STALE_US);
+        // In order of precedence: stale map, torn map, lagging map, stale positions.
+        let mut code = pick(objects, 4, 0);
+        code = pick(lag, 3, code);
+        code = pick(torn, 2, code);
+        code = pick(stale, 1, code);
+        match code {
+            1 => Some(Problem::MapStale),
+            2 => Some(Problem::MapTorn),
+            3 => Some(Problem::MapLag),
+            4 => Some(Problem::ObjectsStale),
+            _ => None,
+        }
+    }
+}
+
+/// -1 when `x` is not zero, else 0.
+fn nonzero(x: u32) -> i32 {
+    ((x | x.wrapping_neg()) as i32) >> 31
+}

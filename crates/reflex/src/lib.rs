@@ -1,0 +1,727 @@
+//! Reflex control (thesis ch. V): the arm may go wherever it likes as long as it can always
+//! stop in known free space.
+//!
+//! Each pass takes the servo's published state (angles, velocities, arrest points: the
+//! points each link stops at under full braking, V.5) and the goal, and publishes a
+//! subgoal for the servo that is safe by construction:
+//!
+//! * **Invariant.** The servo drives each link independently toward its setpoint without
+//!   overshoot (law III.36), so from state (theta, omega) with arrest point a and setpoint g
+//!   link i stays within hull(theta_i, a_i, g_i). Until the servo picks up a new setpoint g',
+//!   it still follows the previous one g, so the arm stays inside the rectangle
+//!   hull(theta, a, g, g') (per axis). The reflex only publishes g' when that rectangle, grown
+//!   by margins for everything the model leaves out (latency of the published state and of
+//!   the subgoal, the arrest point's own advance at 2 omega (V.6), inertia error, servo
+//!   overshoot, obstacles moving up to [`Config::border_px_s`] meanwhile), holds only free
+//!   pixels. g' = g always qualifies while the obstacles stand still, so there is always a
+//!   safe choice. The subgoal itself keeps as far inside the tested window as obstacles
+//!   could advance while the arm stops.
+//! * **Lookahead window** (figs. V.4, V.5): that base rectangle is tested whole each pass
+//!   (which also finds obstacles that moved into the arrest region, the thesis's backward
+//!   search, and around the arm, its "myopic" search), then grown toward the goal one column
+//!   and one row at a time, alternately, to a depth that follows speed; each axis stops at
+//!   the first obstacle wall ([`window`]).
+//! * **Reflex subgoal** (V.6-V.9): the point of the window nearest the goal, kept its margins
+//!   inside. Far from obstacles it runs ahead of the arrest point and the servo accelerates
+//!   as if the goal itself were set; near one, it stops at the wall and the servo brakes
+//!   along that axis only (V.11: one binding axis per obstacle), while the other axis goes on.
+//! * **Braking.** If margins grown with speed reach an obstacle, the subgoal is kept within
+//!   the arrest region itself: the servo brakes, the margins shrink, growth resumes.
+//! * **Escape** (fig. V.10). If an obstacle covers the arm or its arrest region (it moved in,
+//!   or the arm started inside), the subgoal is the nearest free place, the one nearest the
+//!   goal among equals.
+//! * **Stall.** At rest, short of the goal, with the subgoal stuck for [`STALL_US`]: flagged
+//!   for the planner (ch. VI).
+//! * **Fail-safe** ([`health`]): a stale, torn or lagging map, stale obstacle positions, a
+//!   stale servo state or a goal source that stopped make the reflex hold the arm at the
+//!   arrest point it had when the problem began, and record the fault.
+//!
+//! Angles: micro-radians at the interfaces (the servo's units); angle units of 2 pi / 32768
+//! (256 per map pixel, `crates/cspace`) inside. Nothing here touches hardware: the board
+//! hands in a [`window::Map`].
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+
+pub mod goal;
+pub mod health;
+pub mod masks;
+pub mod script;
+pub mod window;
+
+use health::{HealthInput, Monitor, Problem};
+use window::{Grow, Grown, Map, Span};
+
+/// Pixels per map axis.
+pub const SIDE: u32 = 128;
+/// Angle units per map pixel.
+pub const PIX_U: i32 = 256;
+
+/// Micro-radians to angle units, Q32 (32768 / (2 pi 10^6)).
+const URAD_TO_U_Q32: i32 = 22_399_067;
+/// Angle units to micro-radians, Q16.
+const U_TO_URAD_Q16: i32 = 12_566_371;
+/// 2^32 / 10^6, rounded up: times microseconds, Q32 seconds (never short).
+const US_TO_S_Q32: i32 = 4295;
+
+/// Micro-radians to angle units (rounded).
+pub fn urad_to_u(a_urad: i32) -> i32 {
+    fx::mul_shr(a_urad, URAD_TO_U_Q32, 32)
+}
+
+/// Angle units to micro-radians (rounded).
+pub fn u_to_urad(a_u: i32) -> i32 {
+    fx::mul_shr(a_u, U_TO_URAD_Q16, 16)
+}
+
+/// Fixed margin around every rectangle, angle units (a quarter pixel, 12 mrad): servo
+/// overshoot (<= 0.5 mrad, issue 5), observer error, rounding.
+pub const MARGIN_U: i32 = 64;
+/// Extra margin beyond the arrest point, as a fraction 1 / 2^n of the braking distance:
+/// the servo's inertia estimate may be off (issue 5 tests +-20%).
+pub const ARREST_SLACK_SHIFT: u32 = 2;
+/// Window depth beyond the base rectangle at rest, pixels (thesis: 6 along theta1, 8 along
+/// theta2); speed adds twice the arrest point's advance per pass.
+pub const DEPTH_PX: i32 = 8;
+/// Most pixel words read while growing the window per pass.
+pub const GROW_BUDGET: u32 = 1024;
+/// Escape search radius, pixels.
+pub const ESCAPE_PX: i32 = 12;
+/// Free pixels around an escape target, each side (more among moving obstacles).
+pub const ESCAPE_CLEAR_PX: i32 = 1;
+/// Among moving obstacles: the time the arm needs to react to one (the map's refresh and
+/// the servo's first move), over which the arm keeps the distance an obstacle border covers
+/// at [`Config::border_px_s`].
+pub const REACT_US: i32 = 100_000;
+/// At rest, short of the goal, the subgoal stuck this long: stalled.
+pub const STALL_US: u32 = 200_000;
+/// Below this speed (both links) the arm counts as at rest, micro-radians per second.
+pub const REST_URAD_S: i32 = 50_000;
+/// The goal counts as reached within this distance (each axis), micro-radians (2 encoder
+/// counts of link 2).
+pub const AT_GOAL_URAD: i32 = 1_600;
+/// A servo state that did not change over this many passes is stale.
+pub const SERVO_STALE_PASSES: u32 = 20;
+/// The wand's goal is recomputed when the wand moves by more than this (each axis),
+/// micrometres: below the sensing board's accuracy (issue 6: 0.9 mm rms).
+pub const WAND_MOVE_UM: i32 = 1_000;
+/// A planner goal record unchanged for this long is stale: the reflex stops advancing.
+pub const PLANNER_STALE_US: u32 = 50_000;
+
+/// Bits of the published flags word (`ReflexSubgoal::flags`), defined with the record.
+pub use vme_map::records::reflex_flags as flags;
+
+/// The servo's published state, as the reflex uses it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ServoView {
+    /// Absolute angles.
+    pub theta_urad: [i32; 2],
+    /// Velocities.
+    pub omega_urad_s: [i32; 2],
+    /// Arrest points.
+    pub arrest_urad: [i32; 2],
+    /// Servo clock of the sample.
+    pub t_us: u32,
+    /// Servo loop counter.
+    pub loops: u32,
+}
+
+/// Where the goal comes from this pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GoalInput {
+    /// The planner's goal record (absolute angles) and its cycle counter.
+    Planner {
+        /// The goal.
+        goal_urad: [i32; 2],
+        /// The planner's cycle counter (must keep changing).
+        cycle: u32,
+    },
+    /// No planner: the wand's sensed position.
+    Wand {
+        /// x, micrometres.
+        x_um: i32,
+        /// y, micrometres.
+        y_um: i32,
+    },
+    /// Nothing new (no planner, wand not in view): keep the last goal.
+    None,
+}
+
+/// One pass's inputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Input {
+    /// The servo state, `None` if it read torn.
+    pub servo: Option<ServoView>,
+    /// The goal.
+    pub goal: GoalInput,
+    /// The freshness readings.
+    pub health: HealthInput,
+    /// Some obstacle is moving (the sensing board's flag on a valid obstacle beacon).
+    pub obstacles_moving: bool,
+}
+
+/// Why the reflex holds the arm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fault {
+    /// The servo state stopped changing.
+    ServoStale,
+    /// The servo state read torn beyond retry, pass after pass.
+    ServoTorn,
+    /// The planner's goal stopped changing.
+    PlannerStale,
+    /// A problem with the map or the obstacle positions.
+    Input(Problem),
+}
+
+/// One pass's outputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Output {
+    /// Publish this subgoal (absolute angles); `None` before the first servo state.
+    pub subgoal_urad: Option<[i32; 2]>,
+    /// [`flags`] bits.
+    pub flags: u32,
+    /// The goal in use (absolute angles, nearest the arm on the torus for the wand's).
+    pub goal_urad: [i32; 2],
+    /// The window tested: pixel spans along theta1 and theta2.
+    pub window: [(i32, i32); 2],
+    /// Pixel words read this pass.
+    pub tests: u32,
+    /// Servo-clock time since the previous pass.
+    pub dt_us: u32,
+    /// A fault that started this pass (to record once).
+    pub new_fault: Option<Fault>,
+}
+
+/// Tunable behaviour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// Fastest a C-space obstacle border may move toward the arm, pixels per second (thesis
+    /// line ~1597: 30 for quasi-static obstacles).
+    pub border_px_s: i32,
+}
+
+impl Config {
+    /// The thesis's quasi-static bound.
+    pub const DEFAULT: Config = Config { border_px_s: 30 };
+}
+
+/// Smallest plausible braking acceleration per link, angle units / s^2: u^ (the servo's
+/// fraction of umax) over the inertia with the servo's prior error (1.25 x).
+const BRAKE_U_S2: [i32; 2] = [brake_u_s2(&arm::LINK1), brake_u_s2(&arm::LINK2)];
+
+const fn brake_u_s2(l: &arm::Link) -> i32 {
+    let acc = l.torque_limit_nm * servo::params::TUNED_UHAT_FRACTION
+        / (l.inertia_kgm2 * servo::params::PRIOR_INERTIA_SCALE);
+    (acc * 32768.0 / (2.0 * core::f64::consts::PI)) as i32
+}
+
+/// 10^6 / [`BRAKE_U_S2`], Q24: microseconds to stop per (angle unit / s) of speed.
+const STOP_US_PER_U_S_Q24: [i32; 2] = [
+    (16_777_216.0 * 1e6 / BRAKE_U_S2[0] as f64) as i32,
+    (16_777_216.0 * 1e6 / BRAKE_U_S2[1] as f64) as i32,
+];
+
+/// The reflex's state between passes.
+#[derive(Clone, Debug)]
+pub struct Reflex {
+    cfg: Config,
+    monitor: Monitor,
+    /// The subgoal last published (absolute, micro-radians).
+    last: Option<[i32; 2]>,
+    /// The goal in use.
+    goal: Option<[i32; 2]>,
+    hold: Option<Fault>,
+    hold_at: [i32; 2],
+    last_loops: u32,
+    same_loops: u32,
+    torn: u32,
+    last_t_us: u32,
+    now_us: u32,
+    started_us: u32,
+    healthy_once: bool,
+    planner_cycle: Option<u32>,
+    planner_since_us: u32,
+    stall_ref: [i32; 2],
+    stall_since_us: u32,
+    /// The escape target of the previous pass (unwrapped pixels).
+    escape_to: Option<[i32; 2]>,
+    /// The wand position the goal was last computed from.
+    wand_um: [i32; 2],
+}
+
+impl Default for Reflex {
+    fn default() -> Self {
+        Self::new(Config::DEFAULT)
+    }
+}
+
+impl Reflex {
+    /// A reflex that has seen nothing yet.
+    pub const fn new(cfg: Config) -> Self {
+        Self {
+            cfg,
+            monitor: Monitor::new(),
+            last: None,
+            goal: None,
+            hold: None,
+            hold_at: [0; 2],
+            last_loops: 0,
+            same_loops: 0,
+            torn: 0,
+            last_t_us: 0,
+            now_us: 0,
+            started_us: 0,
+            healthy_once: false,
+            planner_cycle: None,
+            planner_since_us: 0,
+            stall_ref: [0; 2],
+            stall_since_us: 0,
+            escape_to: None,
+            wand_um: [0; 2],
+        }
+    }
+
+    /// Whether the arm is held because of a fault (recorded when it began).
+    pub fn holding(&self) -> bool {
+        self.hold.is_some()
+    }
+
+    /// One pass: reads the inputs and the map, returns the subgoal to publish.
+    #[inline(never)]
+    pub fn step<M: Map + ?Sized>(&mut self, inp: &Input, map: &mut M) -> Output {
+        let mut out = Output::default();
+        let Some(sv) = inp.servo else {
+            self.torn += 1;
+            if self.torn > SERVO_STALE_PASSES {
+                let at = self.last.unwrap_or(self.hold_at);
+                return self.hold_output(Fault::ServoTorn, at, out);
+            }
+            out.subgoal_urad = self.last;
+            out.flags = self.hold.map_or(0, |_| flags::HOLD);
+            return out;
+        };
+        self.torn = 0;
+        let first = self.last.is_none();
+        if first {
+            self.last_t_us = sv.t_us;
+            self.started_us = sv.t_us;
+            self.now_us = sv.t_us;
+            self.last_loops = sv.loops;
+            self.last = Some(sv.arrest_urad);
+            self.hold_at = sv.arrest_urad;
+            self.stall_ref = sv.arrest_urad;
+            self.stall_since_us = sv.t_us;
+        }
+        if sv.loops == self.last_loops && !first {
+            self.same_loops += 1;
+        } else {
+            self.same_loops = 0;
+        }
+        self.last_loops = sv.loops;
+        if self.same_loops > SERVO_STALE_PASSES {
+            return self.hold_output(Fault::ServoStale, sv.arrest_urad, out);
+        }
+        let dt_us = sv.t_us.wrapping_sub(self.last_t_us);
+        self.last_t_us = sv.t_us;
+        self.now_us = sv.t_us;
+        out.dt_us = dt_us;
+
+        // The inputs must be good; until they first are, the arm holds without a fault.
+        let problem = self.monitor.observe(&inp.health, self.now_us);
+        if problem.is_none() && !self.healthy_once && self.monitor.behind() {
+            out.subgoal_urad = Some(self.hold_point(sv));
+            out.flags = flags::WAITING;
+            return out;
+        }
+        if let Some(p) = problem {
+            if self.healthy_once || self.now_us.wrapping_sub(self.started_us) > health::STARTUP_US {
+                return self.hold_output(Fault::Input(p), sv.arrest_urad, out);
+            }
+            out.subgoal_urad = Some(self.hold_point(sv));
+            out.flags = flags::WAITING;
+            return out;
+        }
+        self.healthy_once = true;
+
+        // The goal.
+        let near = self.goal.unwrap_or(sv.theta_urad);
+        match inp.goal {
+            GoalInput::Planner { goal_urad, cycle } => {
+                if self.planner_cycle != Some(cycle) {
+                    self.planner_cycle = Some(cycle);
+                    self.planner_since_us = self.now_us;
+                }
+                if self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US {
+                    return self.hold_output(Fault::PlannerStale, sv.arrest_urad, out);
+                }
+                self.goal = Some(goal_urad);
+                out.flags |= flags::FROM_PLANNER;
+            }
+            GoalInput::Wand { x_um, y_um } => {
+                // The inverse kinematics (a fifth of a pass on the 68020) only when the wand
+                // moved by more than [`WAND_MOVE_UM`]: its resting noise is below that.
+                let [px, py] = self.wand_um;
+                if self.goal.is_none()
+                    || masks::abs(x_um - px) > WAND_MOVE_UM
+                    || masks::abs(y_um - py) > WAND_MOVE_UM
+                {
+                    self.wand_um = [x_um, y_um];
+                    let poses = goal::inverse(x_um, y_um);
+                    self.goal = Some(goal::choose(poses, near));
+                }
+                out.flags |= flags::FROM_WAND;
+            }
+            GoalInput::None => {}
+        }
+        // Back from a hold: start from where the arm was held.
+        if self.hold.take().is_some() {
+            self.last = Some(self.hold_at);
+        }
+        let goal = self.goal.unwrap_or(self.last.unwrap_or(sv.arrest_urad));
+        out.goal_urad = goal;
+        self.window(sv, goal, dt_us, inp.obstacles_moving, map, &mut out);
+        out
+    }
+
+    /// Holds at the arrest point the arm had when the fault began (`arrest_urad` then);
+    /// records the fault once.
+    #[inline(never)]
+    fn hold_output(&mut self, why: Fault, arrest_urad: [i32; 2], mut out: Output) -> Output {
+        if self.hold != Some(why) {
+            if self.hold.is_none() {
+                self.hold_at = arrest_urad;
+            }
+            self.hold = Some(why);
+            out.new_fault = Some(why);
+        }
+        self.last = Some(self.hold_at);
+        out.subgoal_urad = Some(self.hold_at);
+        out.flags = flags::HOLD;
+        out.goal_urad = self.goal.unwrap_or(self.hold_at);
+        out
+    }
+
+    /// While the inputs are not yet good after power-up: the arrest point of the first pass.
+    fn hold_point(&mut self, _sv: ServoView) -> [i32; 2] {
+        self.last.unwrap_or(self.hold_at)
+    }
+
+    /// The lookahead window and the subgoal (module docs).
+    ///
+    /// Written without local arrays indexed by a loop variable and without iterating a
+    /// local array (docs/toolchain.md, class 6): per-axis work goes through [`Axis`] values
+    /// handed by reference to non-inlined helpers, one call per axis.
+    #[inline(never)]
+    fn window<M: Map + ?Sized>(
+        &mut self,
+        sv: ServoView,
+        goal_urad: [i32; 2],
+        dt_us: u32,
+        moving: bool,
+        map: &mut M,
+        out: &mut Output,
+    ) {
+        let prev = self.last.unwrap_or(sv.arrest_urad);
+        // Latency: the state is up to a pass old when read, and the subgoal waits up to a
+        // pass for the servo; twice the pass time plus half a millisecond, 1 ms passes at
+        // least, 10 ms at most.
+        let lat_us = 2 * masks::clamp(dt_us.min(1 << 30) as i32, 1000, 10_000) + 500;
+        let mut a1 = Axis::default();
+        let mut a2 = Axis::default();
+        prepare(&mut a1, 0, &sv, &prev, &goal_urad, lat_us);
+        prepare(&mut a2, 1, &sv, &prev, &goal_urad, lat_us);
+        // Obstacles moving toward the arm: over the latency, the rectangle must hold them
+        // off; for as long as the arm takes to stop, the subgoal keeps that far from any
+        // wall (an obstacle that does come on is then met by the next pass's rectangle while
+        // the arm can still brake or back off).
+        let border_u_s = self.cfg.border_px_s * PIX_U;
+        let obs_lat = fx::mul_shr(border_u_s, lat_us * US_TO_S_Q32, 32) + 1;
+        let t_stop_us = masks::min(masks::max(a1.stop_us, a2.stop_us) + lat_us, 400_000);
+        let obs_stop = fx::mul_shr(border_u_s, t_stop_us * US_TO_S_Q32, 32) + 1;
+        // Among moving obstacles (the sensing board flags them) the arm also keeps the
+        // distance they cover in the time it takes to react ([`REACT_US`]), and evades
+        // once they come closer.
+        let wide = fx::mul_shr(border_u_s, REACT_US * US_TO_S_Q32, 32) & -(moving as i32);
+        spans(&mut a1, obs_lat, wide);
+        spans(&mut a2, obs_lat, wide);
+        let clear_px = ESCAPE_CLEAR_PX + ((wide + PIX_U - 1) >> 8);
+        let mut tests = 0;
+        let keep = MARGIN_U + obs_stop + wide + PIX_U / 8;
+        let mut sub = [0; 2];
+        if window::rect_free(map, a1.base, a2.base, &mut tests) {
+            let g = Grow {
+                goal: [a1.goal_span(keep), a2.goal_span(keep)],
+                reach: [a1.reach(), a2.reach()],
+                budget: GROW_BUDGET,
+            };
+            let mut grown = Grown {
+                window: [a1.base, a2.base],
+                blocked: [false, false],
+            };
+            window::grow(map, &g, &mut grown, &mut tests);
+            let (w1, w2) = (grown.window[0], grown.window[1]);
+            out.window = [(w1.lo, w1.hi), (w2.lo, w2.hi)];
+            out.flags |= flags::BLOCKED1 & (grown.blocked[0] as u32).wrapping_neg();
+            out.flags |= flags::BLOCKED2 & (grown.blocked[1] as u32).wrapping_neg();
+            sub[0] = clamp_into(goal_urad[0], a1.goal, w1, keep);
+            sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
+        } else {
+            // An obstacle within the arm's own neighbourhood (wider among moving obstacles)
+            // must be evaded; short of that, brake.
+            let near = !window::rect_free(map, a1.own, a2.own, &mut tests);
+            if !near && window::rect_free(map, a1.core, a2.core, &mut tests) {
+                // Brake: the subgoal between the arm and its arrest point, as near the goal
+                // as that allows, so the arrest region only shrinks (a subgoal beyond the
+                // arrest point would let the arm speed up into margins nobody tested).
+                out.flags |= flags::BRAKING;
+                out.window = [(a1.core.lo, a1.core.hi), (a2.core.lo, a2.core.hi)];
+                sub[0] = a1.brake_toward(goal_urad[0]);
+                sub[1] = a2.brake_toward(goal_urad[1]);
+                self.escape_to = None;
+            } else if !near {
+                // The arrest region meets an obstacle but the arm is clear of it: brake as
+                // hard as the servo can (its setpoint behind its arrest point saturates the
+                // law), never ahead of the arm, so a braking subgoal stays put while the arm
+                // slows.
+                out.flags |= flags::BRAKING;
+                out.window = [(a1.own.lo, a1.own.hi), (a2.own.lo, a2.own.hi)];
+                sub[0] = a1.hard_brake();
+                sub[1] = a2.hard_brake();
+                self.escape_to = None;
+            } else {
+                let at = [a1.theta >> 8, a2.theta >> 8];
+                out.window = [(at[0], at[0]), (at[1], at[1])];
+                match self.escape(map, at, [a1.goal >> 8, a2.goal >> 8], clear_px, &mut tests) {
+                    Some(q) => {
+                        out.flags |= flags::ESCAPING;
+                        sub[0] = u_to_urad(q[0] * PIX_U + PIX_U / 2);
+                        sub[1] = u_to_urad(q[1] * PIX_U + PIX_U / 2);
+                    }
+                    None => {
+                        out.flags |= flags::TRAPPED;
+                        sub = sv.arrest_urad;
+                    }
+                }
+            }
+        }
+        if out.flags & flags::ESCAPING == 0 {
+            self.escape_to = None;
+        }
+        out.flags |= self.stall(&sv, &goal_urad, &sub);
+        out.tests = tests;
+        self.last = Some(sub);
+        out.subgoal_urad = Some(sub);
+    }
+
+    /// Where to escape to from pixel `at`: the target of the previous pass while its block
+    /// of `clear` pixels each side stays free (a target that changed each pass made the arm
+    /// dither between two ways out), else the nearest free block, the one nearest `toward`
+    /// among equals, reached by a free rectangle unless the arm's own pixel is marked.
+    #[inline(never)]
+    fn escape<M: Map + ?Sized>(
+        &mut self,
+        map: &mut M,
+        at: [i32; 2],
+        toward: [i32; 2],
+        clear: i32,
+        tests: &mut u32,
+    ) -> Option<[i32; 2]> {
+        if let Some(q) = self.escape_to {
+            let s1 = Span {
+                lo: q[0] - clear,
+                hi: q[0] + clear,
+            };
+            let s2 = Span {
+                lo: q[1] - clear,
+                hi: q[1] + clear,
+            };
+            if window::rect_free(map, s1, s2, tests) {
+                return Some(q);
+            }
+        }
+        let here1 = Span {
+            lo: at[0],
+            hi: at[0],
+        };
+        let here2 = Span {
+            lo: at[1],
+            hi: at[1],
+        };
+        let inside = !window::rect_free(map, here1, here2, tests);
+        // Back off along a free rectangle to a block with the full clearance, or the narrow
+        // one if none is near. When the map marks the arm's own pixel (its conservative
+        // margin, or an obstacle that came on), the rectangle starts at the arm's neighbour
+        // toward the block, so the way out never crosses the obstacle; only if there is no
+        // such way does the arm take the nearest narrow block regardless (fig. V.10).
+        let e = |m: &mut M, clear: i32, direct: bool, tests: &mut u32| {
+            let s = window::Escape {
+                at,
+                toward,
+                max_r: ESCAPE_PX,
+                clear,
+                direct,
+                from_next: inside,
+            };
+            window::escape(m, &s, tests)
+        };
+        let mut q = e(map, clear, true, tests);
+        if q.is_none() && clear > ESCAPE_CLEAR_PX {
+            q = e(map, ESCAPE_CLEAR_PX, true, tests);
+        }
+        if q.is_none() {
+            q = e(map, ESCAPE_CLEAR_PX, false, tests);
+        }
+        self.escape_to = q;
+        q
+    }
+
+    /// The stall, at-goal and arrived flags for subgoal `sub`: at rest, short of the goal,
+    /// the subgoal stuck for [`STALL_US`] is a stall. Masks (-1 = yes), not booleans
+    /// (docs/toolchain.md).
+    #[inline(never)]
+    fn stall(&mut self, sv: &ServoView, goal_urad: &[i32; 2], sub: &[i32; 2]) -> u32 {
+        let quarter = u_to_urad(PIX_U / 4);
+        let d = |a: i32, b: i32| (a - b) | (b - a);
+        // (a - b) | (b - a) is negative exactly when a != b.
+        let off_goal = d(sub[0], goal_urad[0]) | d(sub[1], goal_urad[1]);
+        let moving = masks::lt(REST_URAD_S - 1, masks::abs(sv.omega_urad_s[0]))
+            | masks::lt(REST_URAD_S - 1, masks::abs(sv.omega_urad_s[1]));
+        let far = masks::lt(AT_GOAL_URAD, masks::abs(sv.theta_urad[0] - goal_urad[0]))
+            | masks::lt(AT_GOAL_URAD, masks::abs(sv.theta_urad[1] - goal_urad[1]));
+        let moved = masks::lt(quarter, masks::abs(sub[0] - self.stall_ref[0]))
+            | masks::lt(quarter, masks::abs(sub[1] - self.stall_ref[1]));
+        let at_goal = masks::nonneg(off_goal);
+        let mut f = flags::AT_GOAL & at_goal as u32;
+        f |= flags::ARRIVED & !(moving | far) as u32;
+        let reset = moved | at_goal | moving;
+        let stuck_for = self.now_us.wrapping_sub(self.stall_since_us).min(1 << 30) as i32;
+        f |= flags::STALLED & (!reset & masks::lt(STALL_US as i32, stuck_for)) as u32;
+        self.stall_ref[0] = masks::pick(reset, sub[0], self.stall_ref[0]);
+        self.stall_ref[1] = masks::pick(reset, sub[1], self.stall_ref[1]);
+        self.stall_since_us =
+            masks::pick(reset, self.now_us as i32, self.stall_since_us as i32) as u32;
+        f
+    }
+}
+
+/// One axis of the window's arithmetic, angle units unless named otherwise.
+#[derive(Clone, Copy, Debug, Default)]
+struct Axis {
+    theta: i32,
+    arrest: i32,
+    g_prev: i32,
+    goal: i32,
+    /// How far the arrest point may advance while the state and the subgoal are in transit.
+    adv: i32,
+    /// How far the arm itself may move meanwhile.
+    reach_u: i32,
+    /// -1 turning backward, 0 forward.
+    back: i32,
+    /// Time to stop from the current speed, microseconds.
+    stop_us: i32,
+    theta_urad: i32,
+    arrest_urad: i32,
+    prev_urad: i32,
+    omega_urad_s: i32,
+    base: Span,
+    core: Span,
+    own: Span,
+}
+
+/// Fills `a` with axis `i`'s state.
+#[inline(never)]
+fn prepare(a: &mut Axis, i: usize, sv: &ServoView, prev: &[i32; 2], goal: &[i32; 2], lat_us: i32) {
+    let lat_q32 = lat_us * US_TO_S_Q32;
+    a.theta_urad = sv.theta_urad[i];
+    a.arrest_urad = sv.arrest_urad[i];
+    a.omega_urad_s = sv.omega_urad_s[i];
+    a.prev_urad = prev[i];
+    a.theta = urad_to_u(a.theta_urad);
+    a.arrest = urad_to_u(a.arrest_urad);
+    a.g_prev = urad_to_u(prev[i]);
+    a.goal = urad_to_u(goal[i]);
+    let w = masks::abs(urad_to_u(a.omega_urad_s));
+    // The arrest point advances at up to 2 omega (V.6) while the state is in transit.
+    a.reach_u = fx::mul_shr(w, lat_q32, 32) + 1;
+    a.adv = 2 * a.reach_u;
+    a.back = a.omega_urad_s >> 31;
+    a.stop_us = fx::mul_shr(w, STOP_US_PER_U_S_Q24[i], 24);
+}
+
+/// The axis's base rectangle, arrest region and own neighbourhood, with `obs` the margin for
+/// obstacles moving during the latency and `wide` the one for moving obstacles' reaction
+/// time (0 when none moves).
+#[inline(never)]
+fn spans(a: &mut Axis, obs: i32, wide: i32) {
+    // Where the arm stops at worst if it brakes after the latency: the arrest point
+    // advanced by the latency (V.6) and by the servo's possible inertia error.
+    let slack = masks::abs(a.arrest - a.theta) >> ARREST_SLACK_SHIFT;
+    let ahead = a.adv + slack;
+    let a_end = a.arrest + ((ahead ^ a.back) - a.back);
+    let (lo, hi) = (masks::min(a.theta, a_end), masks::max(a.theta, a_end));
+    a.core = Span::of_units(lo - MARGIN_U, hi + MARGIN_U);
+    // The arm heading for the previous subgoal stops there (the servo does not overshoot);
+    // only an arrest point already beyond it (braking late, or a subgoal that moved back)
+    // reaches further.
+    let (glo, ghi) = (masks::min(a.theta, a.g_prev), masks::max(a.theta, a.g_prev));
+    let tol = MARGIN_U >> 1;
+    let outside = masks::lt(a.arrest, glo - tol) | masks::lt(ghi + tol, a.arrest);
+    let blo = masks::min(glo, masks::pick(outside, lo, a.arrest));
+    let bhi = masks::max(ghi, masks::pick(outside, hi, a.arrest));
+    let m = MARGIN_U + obs + wide;
+    a.base = Span::of_units(blo - m, bhi + m);
+    // The arm itself over the latency.
+    let fwd = a.reach_u & !a.back;
+    let bwd = a.reach_u & a.back;
+    let m = MARGIN_U + wide;
+    a.own = Span::of_units(a.theta - bwd - m, a.theta + fwd + m);
+}
+
+impl Axis {
+    /// The goal with the margin it needs, in pixels.
+    fn goal_span(&self, keep: i32) -> Span {
+        Span::of_units(self.goal - keep, self.goal + keep)
+    }
+
+    /// The farthest the window may grow each way: the arrest region and the lookahead depth
+    /// beyond it (the thesis's window plus twice what the arrest point may advance per pass).
+    fn reach(&self) -> Span {
+        let d = DEPTH_PX + 2 * ((self.adv + PIX_U - 1) >> 8);
+        Span {
+            lo: self.core.lo - d,
+            hi: self.core.hi + d,
+        }
+    }
+
+    /// The goal component clamped between the arm and its arrest point.
+    #[inline(never)]
+    fn brake_toward(&self, goal_urad: i32) -> i32 {
+        let (t, a) = (self.theta_urad, self.arrest_urad);
+        masks::clamp(goal_urad, masks::min(t, a), masks::max(t, a))
+    }
+
+    /// The arm's position, or the previous subgoal if that is already behind the arm.
+    #[inline(never)]
+    fn hard_brake(&self) -> i32 {
+        let behind = ((self.prev_urad - self.theta_urad) ^ self.omega_urad_s) >> 31;
+        masks::pick(behind, self.prev_urad, self.theta_urad)
+    }
+}
+
+/// The goal's component `goal_urad` (`goal_u` in angle units) if it lies at least `keep`
+/// inside the pixel span `s`, else the nearest point that does (the span's middle if it is
+/// too narrow for that).
+#[inline(never)]
+fn clamp_into(goal_urad: i32, goal_u: i32, s: Span, keep: i32) -> i32 {
+    use masks::pick;
+    let lo = s.lo * PIX_U + keep;
+    let hi = (s.hi + 1) * PIX_U - 1 - keep;
+    let narrow = (hi - lo) >> 31;
+    let below = (goal_u - lo) >> 31;
+    let above = (hi - goal_u) >> 31;
+    let mid = u_to_urad(((s.lo + s.hi + 1) * PIX_U) >> 1);
+    let v = pick(below, u_to_urad(lo), pick(above, u_to_urad(hi), goal_urad));
+    pick(narrow, mid, v)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,118 @@
+//! One pass of the reflex from a flat word script, for comparing the 68020 image with the
+//! host bit for bit (the image's test probe `reflex_probe_run` and the system tests call it
+//! with the same words).
+//!
+//! Input, [`IN_WORDS`] words: servo present (0/1), theta1, theta2, omega1, omega2, arrest1,
+//! arrest2, t_us, loops; goal kind (0 none, 1 planner, 2 wand), goal a, goal b, planner
+//! cycle; three C-space heartbeats, objects frame, objects torn (bit 0) and obstacles moving
+//! (bit 1); per work-list entry
+//! claim, state, flags (1 tracked, 2 undrawn), lag_um.
+//!
+//! Output, [`OUT_WORDS`] words: subgoal present, subgoal1, subgoal2, flags, goal1, goal2,
+//! window (lo1, hi1, lo2, hi2), tests, dt_us, new fault code (0 none, 1 servo stale, 2 servo
+//! torn, 3 planner stale, 4 map stale, 5 map lag, 6 map torn, 7 objects stale).
+
+use crate::health::{EntryView, HealthInput, Problem, ENTRIES};
+use crate::window::Map;
+use crate::{Fault, GoalInput, Input, Reflex, ServoView};
+
+/// Words of one pass's input.
+pub const IN_WORDS: usize = 18 + 4 * ENTRIES;
+/// Words of one pass's output.
+pub const OUT_WORDS: usize = 14;
+
+/// Runs one pass of `r` on the input words `w` and the map `map`; writes `out`.
+#[inline(never)]
+pub fn scripted_pass<M: Map + ?Sized>(
+    r: &mut Reflex,
+    w: &[u32; IN_WORDS],
+    map: &mut M,
+    out: &mut [i32; OUT_WORDS],
+) {
+    let servo = (w[0] != 0).then(|| ServoView {
+        theta_urad: [w[1] as i32, w[2] as i32],
+        omega_urad_s: [w[3] as i32, w[4] as i32],
+        arrest_urad: [w[5] as i32, w[6] as i32],
+        t_us: w[7],
+        loops: w[8],
+    });
+    let goal = match w[9] {
+        1 => GoalInput::Planner {
+            goal_urad: [w[10] as i32, w[11] as i32],
+            cycle: w[12],
+        },
+        2 => GoalInput::Wand {
+            x_um: w[10] as i32,
+            y_um: w[11] as i32,
+        },
+        _ => GoalInput::None,
+    };
+    let mut health = HealthInput {
+        cspace_heartbeats: [w[13], w[14], w[15]],
+        objects_frame: w[16],
+        objects_torn: w[17] & 1 != 0,
+        entries: [EntryView::default(); ENTRIES],
+    };
+    entries(&mut health, w);
+    let o = r.step(
+        &Input {
+            servo,
+            goal,
+            health,
+            obstacles_moving: w[17] & 2 != 0,
+        },
+        map,
+    );
+    *out = [
+        0,
+        0,
+        0,
+        o.flags as i32,
+        o.goal_urad[0],
+        o.goal_urad[1],
+        o.window[0].0,
+        o.window[0].1,
+        o.window[1].0,
+        o.window[1].1,
+        o.tests as i32,
+        o.dt_us as i32,
+        o.new_fault.map_or(0, fault_code),
+        0,
+    ];
+    if let Some(sub) = o.subgoal_urad {
+        out[0] = 1;
+        out[1] = sub[0];
+        out[2] = sub[1];
+    }
+}
+
+/// The work-list words of the script into `h` (a non-inlined fill through a reference: a
+/// local array filled in a loop lost its index on the 68k; docs/toolchain.md, class 6).
+#[inline(never)]
+fn entries(h: &mut HealthInput, w: &[u32; IN_WORDS]) {
+    let mut i = 0;
+    while i < ENTRIES {
+        let k = 18 + 4 * i;
+        h.entries[i] = EntryView {
+            claim: w[k],
+            state: w[k + 1],
+            tracked: w[k + 2] & 1 != 0,
+            undrawn: w[k + 2] & 2 != 0,
+            lag_um: w[k + 3] as i32,
+        };
+        i += 1;
+    }
+}
+
+/// The script's code of a fault.
+pub fn fault_code(f: Fault) -> i32 {
+    match f {
+        Fault::ServoStale => 1,
+        Fault::ServoTorn => 2,
+        Fault::PlannerStale => 3,
+        Fault::Input(Problem::MapStale) => 4,
+        Fault::Input(Problem::MapLag) => 5,
+        Fault::Input(Problem::MapTorn) => 6,
+        Fault::Input(Problem::ObjectsStale) => 7,
+    }
+}

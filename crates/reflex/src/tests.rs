@@ -1,0 +1,458 @@
+//! The reflex stepped alone against hand-made maps (figs. V.6-V.10), its fail-safes, the
+//! wand's inverse kinematics, and a closed loop with an ideal time-optimal servo over random
+//! obstacles that must never be entered.
+
+use super::*;
+use health::{EntryView, HealthInput};
+use proptest::prelude::*;
+use window::SliceMap;
+
+const RAD: f64 = 1e6;
+
+/// A 128 x 128 map with its stripes.
+struct TestMap {
+    words: Vec<u32>,
+    stripes: Vec<u32>,
+}
+
+impl TestMap {
+    fn new() -> Self {
+        Self {
+            words: vec![0; 128 * 128],
+            stripes: vec![0; 128],
+        }
+    }
+    /// Marks pixels i1 in a..=b, i2 in c..=d (wrapping).
+    fn block(&mut self, a: i32, b: i32, c: i32, d: i32) {
+        for i1 in a..=b {
+            for i2 in c..=d {
+                self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] = 0x0100_0000;
+            }
+        }
+    }
+    fn occupied(&self, t1_rad: f64, t2_rad: f64) -> bool {
+        let p = |t: f64| {
+            ((t / (2.0 * std::f64::consts::PI) * 128.0).floor() as i64).rem_euclid(128) as usize
+        };
+        let (i1, i2) = (p(t1_rad), p(t2_rad));
+        self.words[i2 * 128 + i1] != 0 || self.stripes[i1] != 0
+    }
+    fn map(&self) -> SliceMap<'_> {
+        SliceMap {
+            words: &self.words,
+            stripes: &self.stripes,
+        }
+    }
+}
+
+/// Inputs that are all fresh at pass `k`.
+fn healthy(k: u32) -> HealthInput {
+    HealthInput {
+        cspace_heartbeats: [k, 0, 0],
+        objects_frame: k,
+        objects_torn: false,
+        entries: [EntryView::default(); health::ENTRIES],
+    }
+}
+
+fn servo_at(theta: [f64; 2], omega: [f64; 2], k: u32) -> ServoView {
+    let arrest = |i: usize| {
+        let a = BRAKE_U_S2[i] as f64 * 2.0 * std::f64::consts::PI / 32768.0;
+        theta[i] + omega[i] * omega[i].abs() / (2.0 * a)
+    };
+    ServoView {
+        theta_urad: [(theta[0] * RAD) as i32, (theta[1] * RAD) as i32],
+        omega_urad_s: [(omega[0] * RAD) as i32, (omega[1] * RAD) as i32],
+        arrest_urad: [(arrest(0) * RAD) as i32, (arrest(1) * RAD) as i32],
+        t_us: 1000 * k,
+        loops: 3 * k,
+    }
+}
+
+fn planner(goal: [f64; 2], k: u32) -> GoalInput {
+    GoalInput::Planner {
+        goal_urad: [(goal[0] * RAD) as i32, (goal[1] * RAD) as i32],
+        cycle: k,
+    }
+}
+
+/// Runs `n` passes at rest at `theta` toward `goal`; returns the last output.
+fn at_rest(m: &TestMap, theta: [f64; 2], goal: [f64; 2], n: u32) -> Output {
+    let mut r = Reflex::default();
+    let mut out = Output::default();
+    for k in 1..=n {
+        let inp = Input {
+            servo: Some(servo_at(theta, [0.0; 2], k)),
+            goal: planner(goal, k),
+            health: healthy(k),
+            obstacles_moving: false,
+        };
+        out = r.step(&inp, &mut m.map());
+    }
+    out
+}
+
+fn sub(o: &Output) -> [f64; 2] {
+    let s = o.subgoal_urad.unwrap();
+    [s[0] as f64 / RAD, s[1] as f64 / RAD]
+}
+
+const PIX: f64 = 2.0 * std::f64::consts::PI / 128.0;
+
+#[test]
+fn a_goal_inside_the_window_is_the_subgoal() {
+    // Fig. V.6.
+    let m = TestMap::new();
+    let o = at_rest(&m, [1.0, 1.0], [1.2, 0.8], 3);
+    assert_eq!(o.subgoal_urad, Some([1_200_000, 800_000]));
+    assert_ne!(o.flags & flags::AT_GOAL, 0);
+}
+
+#[test]
+fn a_far_goal_gives_a_subgoal_at_the_window_edge() {
+    // Fig. V.7: no obstacle, goal beyond the window: the subgoal at the window's far side,
+    // well beyond the arrest point (here the arm itself) so the servo accelerates.
+    let m = TestMap::new();
+    let o = at_rest(&m, [0.5, 0.5], [2.5, -1.0], 3);
+    let s = sub(&o);
+    assert!(s[0] > 0.5 + 6.0 * PIX && s[0] < 2.5, "{s:?}");
+    assert!(s[1] < 0.5 - 6.0 * PIX && s[1] > -1.0, "{s:?}");
+    assert_eq!(
+        o.flags & (flags::AT_GOAL | flags::BLOCKED1 | flags::BLOCKED2),
+        0
+    );
+}
+
+#[test]
+fn a_wall_along_one_axis_stops_that_axis_only() {
+    // Fig. V.8: a wall across theta1 three pixels ahead; theta2 still reaches its goal.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p + 3, p + 5, 0, 127);
+    let o = at_rest(&m, [1.0, 1.0], [2.0, 1.2], 3);
+    let s = sub(&o);
+    assert_ne!(o.flags & flags::BLOCKED1, 0);
+    assert!(s[0] < (p + 3) as f64 * PIX && s[0] > 1.0, "{s:?}");
+    assert_eq!(s[1], 1.2);
+    assert!(!m.occupied(s[0], s[1]));
+}
+
+#[test]
+fn walls_along_both_axes_stop_both() {
+    // Fig. V.9: an obstacle ahead on the diagonal: growth stops on both axes.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p + 3, p + 10, p - 20, p + 10);
+    m.block(p - 20, p + 10, p + 3, p + 10);
+    let o = at_rest(&m, [1.0, 1.0], [1.5, 1.5], 3);
+    let s = sub(&o);
+    assert_ne!(o.flags & flags::BLOCKED1, 0);
+    assert_ne!(o.flags & flags::BLOCKED2, 0);
+    assert!(
+        s[0] < (p + 3) as f64 * PIX && s[1] < (p + 3) as f64 * PIX,
+        "{s:?}"
+    );
+}
+
+#[test]
+fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
+    // Fig. V.10: the obstacle moved over the arm; it heads for the nearest free pixel.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p - 2, p + 6, p - 6, p + 6);
+    let o = at_rest(&m, [1.0, 1.0], [2.0, 1.0], 2);
+    assert_ne!(o.flags & flags::ESCAPING, 0);
+    let s = sub(&o);
+    assert!(!m.occupied(s[0], s[1]), "{s:?}");
+    // The nearest way out is through the near (-theta1) side: 3 pixels, not 6.
+    assert!(s[0] < 1.0, "{s:?}");
+}
+
+#[test]
+fn a_stuck_arm_is_flagged_stalled() {
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p + 2, p + 5, 0, 127);
+    let early = at_rest(&m, [1.0, 1.0], [2.0, 1.0], 100);
+    assert_eq!(early.flags & flags::STALLED, 0);
+    let o = at_rest(&m, [1.0, 1.0], [2.0, 1.0], 300);
+    assert_ne!(o.flags & flags::STALLED, 0);
+}
+
+#[test]
+fn a_stale_map_holds_the_arm_at_its_arrest_point_and_records_once() {
+    let m = TestMap::new();
+    let mut r = Reflex::default();
+    let mut faults = Vec::new();
+    let mut last = None;
+    for k in 1..=200u32 {
+        let mut h = healthy(k);
+        if k > 50 {
+            h.cspace_heartbeats = [50, 0, 0];
+        }
+        let sv = servo_at([1.0 + 0.02 * k as f64 / 100.0, 0.0], [20.0, 0.0], k);
+        let o = r.step(
+            &Input {
+                servo: Some(sv),
+                goal: planner([3.0, 0.0], k),
+                health: h,
+                obstacles_moving: false,
+            },
+            &mut m.map(),
+        );
+        if let Some(f) = o.new_fault {
+            faults.push((k, f));
+            last = Some(sv.arrest_urad);
+        }
+        if k > 85 {
+            assert_ne!(o.flags & flags::HOLD, 0, "pass {k}");
+            assert_eq!(o.subgoal_urad, last, "pass {k}");
+        }
+    }
+    assert_eq!(faults.len(), 1, "{faults:?}");
+    assert!(matches!(
+        faults[0].1,
+        Fault::Input(health::Problem::MapStale)
+    ));
+    assert!((80..=83).contains(&faults[0].0), "{faults:?}");
+}
+
+#[test]
+fn a_torn_map_update_and_a_lagging_image_hold_the_arm() {
+    let m = TestMap::new();
+    for (what, want) in [
+        (0, health::Problem::MapTorn),
+        (1, health::Problem::MapLag),
+        (2, health::Problem::ObjectsStale),
+    ] {
+        let mut r = Reflex::default();
+        let mut got = None;
+        for k in 1..=300u32 {
+            let mut h = healthy(k);
+            if k > 10 {
+                match what {
+                    0 => {
+                        h.entries[2] = EntryView {
+                            claim: 2,
+                            state: 7,
+                            ..Default::default()
+                        }
+                    }
+                    1 => {
+                        h.entries[4] = EntryView {
+                            tracked: true,
+                            lag_um: 40_000,
+                            ..Default::default()
+                        }
+                    }
+                    _ => h.objects_frame = 10,
+                }
+            }
+            let o = r.step(
+                &Input {
+                    servo: Some(servo_at([0.0, 0.0], [0.0, 0.0], k)),
+                    goal: planner([1.0, 1.0], k),
+                    health: h,
+                    obstacles_moving: false,
+                },
+                &mut m.map(),
+            );
+            if let Some(Fault::Input(p)) = o.new_fault {
+                got.get_or_insert((k, p));
+            }
+        }
+        let (k, p) = got.unwrap_or_else(|| panic!("case {what}: no fault"));
+        assert_eq!(p, want);
+        assert!(k < 130, "case {what}: fault at pass {k}");
+    }
+}
+
+#[test]
+fn a_stale_servo_state_or_planner_holds_the_arm() {
+    let m = TestMap::new();
+    // Servo: the same loop counter pass after pass.
+    let mut r = Reflex::default();
+    let mut fault = None;
+    for k in 1..=60u32 {
+        let mut sv = servo_at([0.5, 0.5], [0.0, 0.0], k.min(10));
+        sv.t_us = 1000 * k;
+        let o = r.step(
+            &Input {
+                servo: Some(sv),
+                goal: planner([1.0, 1.0], k),
+                health: healthy(k),
+                obstacles_moving: false,
+            },
+            &mut m.map(),
+        );
+        fault = fault.or(o.new_fault);
+    }
+    assert_eq!(fault, Some(Fault::ServoStale));
+    // Planner: the same cycle counter for longer than PLANNER_STALE_US.
+    let mut r = Reflex::default();
+    let mut fault = None;
+    for k in 1..=100u32 {
+        let o = r.step(
+            &Input {
+                servo: Some(servo_at([0.5, 0.5], [0.0, 0.0], k)),
+                goal: planner([1.0, 1.0], k.min(20)),
+                health: healthy(k),
+                obstacles_moving: false,
+            },
+            &mut m.map(),
+        );
+        fault = fault.or(o.new_fault);
+        if k > 75 {
+            assert_eq!(o.subgoal_urad, Some([500_000, 500_000]));
+        }
+    }
+    assert_eq!(fault, Some(Fault::PlannerStale));
+}
+
+#[test]
+fn nothing_is_published_before_the_servo_is_and_the_arm_holds_until_the_map_is_good() {
+    let m = TestMap::new();
+    let mut r = Reflex::default();
+    let o = r.step(
+        &Input {
+            servo: None,
+            goal: GoalInput::None,
+            health: healthy(1),
+            obstacles_moving: false,
+        },
+        &mut m.map(),
+    );
+    assert_eq!(o.subgoal_urad, None);
+    // No C-space board yet: hold, without a fault during start-up.
+    for k in 1..=100u32 {
+        let mut h = healthy(k);
+        h.cspace_heartbeats = [0; 3];
+        let o = r.step(
+            &Input {
+                servo: Some(servo_at([0.3, 0.2], [0.0, 0.0], k)),
+                goal: planner([1.0, 1.0], k),
+                health: h,
+                obstacles_moving: false,
+            },
+            &mut m.map(),
+        );
+        assert_eq!(o.subgoal_urad, Some([300_000, 200_000]));
+        assert_eq!(o.new_fault, None);
+    }
+}
+
+fn forward(p: [i32; 2]) -> (f64, f64) {
+    arm::geometry::tip(p[0] as f64 / RAD, p[1] as f64 / RAD)
+}
+
+proptest! {
+    #[test]
+    fn the_wands_poses_put_the_tip_on_the_wand(x in -480_000i32..480_000, y in -480_000i32..480_000) {
+        let r = (x as f64).hypot(y as f64);
+        prop_assume!(r > 20_000.0 && r < 495_000.0);
+        for p in goal::inverse(x, y) {
+            let (tx, ty) = forward(p);
+            let e = (tx * 1e6 - x as f64).hypot(ty * 1e6 - y as f64);
+            prop_assert!(e < 60.0, "pose {p:?}: tip {e:.1} um off");
+        }
+    }
+
+    #[test]
+    fn the_chosen_pose_is_the_nearer_one_on_the_torus(a in -3_000_000i32..3_000_000, b in -3_000_000i32..3_000_000, t in -12_000_000i32..12_000_000) {
+        let p = [[a, b], [b, a]];
+        let near = [t, t / 2];
+        let q = goal::choose(p, near);
+        for i in 0..2 {
+            prop_assert!((q[i] - near[i]).abs() <= fx::trig::PI_URAD);
+            prop_assert_eq!(goal::wrap(q[i]), goal::wrap(q[i]));
+        }
+    }
+}
+
+/// An ideal time-optimal servo per link: full acceleration toward the setpoint until the
+/// braking curve at u^ (the reflex's own braking model) is met, then braking along it; the
+/// arrest point the real servo publishes. Speed limited to the motors' limit.
+struct IdealArm {
+    theta: [f64; 2],
+    omega: [f64; 2],
+    goal: [f64; 2],
+}
+
+impl IdealArm {
+    fn acc(i: usize) -> f64 {
+        arm::LINKS[i].max_accel_rad_s2()
+    }
+    fn brake(i: usize) -> f64 {
+        BRAKE_U_S2[i] as f64 * 2.0 * std::f64::consts::PI / 32768.0
+    }
+    fn step(&mut self, dt: f64) {
+        for i in 0..2 {
+            let e = self.goal[i] - self.theta[i];
+            let w = self.omega[i];
+            let b = Self::brake(i);
+            let stop = w * w.abs() / (2.0 * b);
+            let u = if e.abs() < 1e-4 && w.abs() < 0.02 {
+                self.omega[i] = 0.0;
+                continue;
+            } else if (e - stop) > 0.0 {
+                Self::acc(i).min((e - stop) / (dt * dt) + 0.0)
+            } else {
+                -Self::acc(i).min((stop - e) / (dt * dt))
+            };
+            // Braking never exceeds the reflex's braking model.
+            let u = if u * w < 0.0 { u.clamp(-b, b) } else { u };
+            self.omega[i] = (w + u * dt).clamp(
+                -arm::LINKS[i].max_speed_rad_s,
+                arm::LINKS[i].max_speed_rad_s,
+            );
+            self.theta[i] += (w + self.omega[i]) / 2.0 * dt;
+        }
+    }
+    fn view(&self, k: u32) -> ServoView {
+        let arrest =
+            |i: usize| self.theta[i] + self.omega[i] * self.omega[i].abs() / (2.0 * Self::brake(i));
+        ServoView {
+            theta_urad: [(self.theta[0] * RAD) as i32, (self.theta[1] * RAD) as i32],
+            omega_urad_s: [(self.omega[0] * RAD) as i32, (self.omega[1] * RAD) as i32],
+            arrest_urad: [(arrest(0) * RAD) as i32, (arrest(1) * RAD) as i32],
+            t_us: 1000 * k,
+            loops: k,
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    #[test]
+    fn the_closed_loop_never_enters_an_obstacle(
+        blocks in proptest::collection::vec((0i32..128, 0i32..128, 1i32..12, 1i32..12), 1..6),
+        start in (0i32..128, 0i32..128),
+        goal in (-6.0f64..6.0, -6.0f64..6.0),
+    ) {
+        let mut m = TestMap::new();
+        for &(a, c, w, h) in &blocks {
+            m.block(a, a + w, c, c + h);
+        }
+        let s = [(start.0 as f64 + 0.5) * PIX, (start.1 as f64 + 0.5) * PIX];
+        prop_assume!(!m.occupied(s[0], s[1]));
+        let mut r = Reflex::default();
+        let mut a = IdealArm { theta: s, omega: [0.0; 2], goal: s };
+        // 1 kHz reflex, the state read at the start of a pass, the subgoal taken up half a
+        // millisecond later; 10 us plant steps; 3 s.
+        for k in 1..=3000u32 {
+            let o = r.step(
+                &Input { servo: Some(a.view(k)), goal: planner([s[0] + goal.0, s[1] + goal.1], k), health: healthy(k), obstacles_moving: false },
+                &mut m.map(),
+            );
+            for j in 0..100 {
+                if j == 50 {
+                    if let Some(g) = o.subgoal_urad {
+                        a.goal = [g[0] as f64 / RAD, g[1] as f64 / RAD];
+                    }
+                }
+                a.step(1e-5);
+                prop_assert!(!m.occupied(a.theta[0], a.theta[1]), "pass {k}: arm at {:?} entered an obstacle", a.theta);
+            }
+        }
+    }
+}

@@ -1,0 +1,346 @@
+//! The lookahead window over the toroidal C-space map (thesis ch. V sections 6-7, figs. V.4,
+//! V.5): rectangles of pixels tested for obstacles, rows and columns added toward the goal
+//! one at a time, alternating axes, each stopped by the first obstacle wall it meets.
+//!
+//! Pixel (`i1`, `i2`) covers theta1 in [i1, i1 + 1) and theta2 in [i2, i2 + 1) pixels of
+//! 2 pi / 128 (absolute joint angles, `crates/cspace`); it is occupied when its word of
+//! edge-direction counters or the stripe word of its column is not zero. The C-space board
+//! marks every pixel an obstacle's image touches, interior included, so a free pixel holds
+//! no colliding configuration (issue 7's property tests). Any counter counts: the thesis
+//! tested only the faces whose normals face the motion; testing all of them is cheaper on a
+//! word-wide bus and can only stop the arm earlier.
+//!
+//! Pixel ranges here are unwrapped (any `i32`, the map index is the value mod 128) and
+//! inclusive; a range of 128 pixels or more is the whole axis.
+
+use crate::SIDE;
+
+/// Read access to the C-space map, as wide as the hardware allows. `row_or` and `col_or`
+/// never wrap: the callers split ranges at the torus edge.
+pub trait Map {
+    /// The bitwise or of the words of pixels `i1 .. i1 + n` in row `i2` (`i1 + n <= 128`).
+    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32;
+    /// The bitwise or of the words of pixels `i2 .. i2 + n` in column `i1` (`i2 + n <= 128`).
+    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32;
+    /// The bitwise or of stripe words `i1 .. i1 + n` (`i1 + n <= 128`).
+    fn stripes_or(&mut self, i1: u32, n: u32) -> u32;
+}
+
+/// A map held in plain slices: 128 x 128 words (row `i2` after row `i2 - 1`) and 128
+/// stripe words. For tests and the host's tools.
+pub struct SliceMap<'a> {
+    /// The pixel words, index `i2 * 128 + i1`.
+    pub words: &'a [u32],
+    /// The stripe words, index `i1`.
+    pub stripes: &'a [u32],
+}
+
+impl Map for SliceMap<'_> {
+    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
+        let b = (i2 * SIDE + i1) as usize;
+        self.words[b..b + n as usize].iter().fold(0, |a, w| a | w)
+    }
+    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        (i2..i2 + n).fold(0, |a, r| a | self.words[(r * SIDE + i1) as usize])
+    }
+    fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
+        self.stripes[i1 as usize..(i1 + n) as usize]
+            .iter()
+            .fold(0, |a, w| a | w)
+    }
+}
+
+/// An inclusive range of unwrapped pixel indices along one axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Span {
+    /// First pixel.
+    pub lo: i32,
+    /// Last pixel (>= `lo`).
+    pub hi: i32,
+}
+
+impl Span {
+    /// The pixels an angle interval [`lo_u`, `hi_u`] (angle units, 256 per pixel) touches.
+    pub fn of_units(lo_u: i32, hi_u: i32) -> Self {
+        Self {
+            lo: lo_u >> 8,
+            hi: hi_u >> 8,
+        }
+    }
+
+    /// Pixels in the span, at most the whole axis.
+    pub fn len(self) -> u32 {
+        ((self.hi - self.lo + 1) as u32).min(SIDE)
+    }
+
+    /// Whether the span has no pixels (never, for a well-formed span).
+    pub fn is_empty(self) -> bool {
+        self.hi < self.lo
+    }
+
+    /// The span as at most two runs of map indices that do not wrap: (start, count) each,
+    /// the second of count 0 when one suffices.
+    pub fn runs(self) -> [(u32, u32); 2] {
+        let n = self.len();
+        let start = (self.lo as u32) & (SIDE - 1);
+        let first = n.min(SIDE - start);
+        [(start, first), (0, n - first)]
+    }
+}
+
+/// Whether every pixel of `s1` x `s2` is free. Adds the words read to `tests`.
+///
+/// The runs are handled one by one, never as a local array iterated (docs/toolchain.md,
+/// class 6).
+#[inline(never)]
+pub fn rect_free<M: Map + ?Sized>(m: &mut M, s1: Span, s2: Span, tests: &mut u32) -> bool {
+    let [(a0, n0), (a1, n1)] = s1.runs();
+    let [(b0, m0), (b1, m1)] = s2.runs();
+    let mut acc = m.stripes_or(a0, n0);
+    if n1 > 0 {
+        acc |= m.stripes_or(a1, n1);
+    }
+    *tests += n0 + n1;
+    if acc != 0 {
+        return false;
+    }
+    rows_free(m, b0, m0, a0, n0, a1, n1, tests) && rows_free(m, b1, m1, a0, n0, a1, n1, tests)
+}
+
+/// Whether rows `b .. b + nb` are free over the runs (`a0`, `n0`) and (`a1`, `n1`).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn rows_free<M: Map + ?Sized>(
+    m: &mut M,
+    b: u32,
+    nb: u32,
+    a0: u32,
+    n0: u32,
+    a1: u32,
+    n1: u32,
+    tests: &mut u32,
+) -> bool {
+    let mut i2 = b;
+    while i2 < b + nb {
+        let mut acc = m.row_or(i2, a0, n0);
+        if n1 > 0 {
+            acc |= m.row_or(i2, a1, n1);
+        }
+        *tests += n0 + n1;
+        if acc != 0 {
+            return false;
+        }
+        i2 += 1;
+    }
+    true
+}
+
+/// Whether column `i1` is free over `s2`.
+#[inline(never)]
+pub fn col_free<M: Map + ?Sized>(m: &mut M, i1: i32, s2: Span, tests: &mut u32) -> bool {
+    let c = (i1 as u32) & (SIDE - 1);
+    let [(b0, m0), (b1, m1)] = s2.runs();
+    *tests += 1 + m0 + m1;
+    let mut acc = m.stripes_or(c, 1) | m.col_or(c, b0, m0);
+    if m1 > 0 {
+        acc |= m.col_or(c, b1, m1);
+    }
+    acc == 0
+}
+
+/// Whether row `i2` is free over `s1`.
+#[inline(never)]
+pub fn row_free<M: Map + ?Sized>(m: &mut M, i2: i32, s1: Span, tests: &mut u32) -> bool {
+    let r = (i2 as u32) & (SIDE - 1);
+    let [(a0, n0), (a1, n1)] = s1.runs();
+    *tests += 2 * (n0 + n1);
+    let mut acc = m.stripes_or(a0, n0) | m.row_or(r, a0, n0);
+    if n1 > 0 {
+        acc |= m.stripes_or(a1, n1) | m.row_or(r, a1, n1);
+    }
+    acc == 0
+}
+
+/// How far the window may grow along each axis, and where the goal lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grow {
+    /// The goal's pixel range along each axis (the goal with its margin): growth along an
+    /// axis stops once the window covers it.
+    pub goal: [Span; 2],
+    /// The farthest pixels the window may reach along each axis (the arrest region and the
+    /// lookahead depth beyond it, each way).
+    pub reach: [Span; 2],
+    /// Most pixel words to read while growing (the base rectangle excluded).
+    pub budget: u32,
+}
+
+/// What growing the window found (also its working state: the caller's value, indexed
+/// through the reference; docs/toolchain.md, class 6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grown {
+    /// The window: the base rectangle and every row and column added, all free.
+    pub window: [Span; 2],
+    /// Growth along the axis stopped at an obstacle wall.
+    pub blocked: [bool; 2],
+}
+
+/// Grows the free rectangle `w.window` (the base, on entry) toward `grow.goal`: one column
+/// (axis 1), then one row (axis 2), alternately (fig. V.5's scans "1", "2", ...), each over
+/// the window's current extent along the other axis, until each axis covers the goal, meets
+/// an obstacle, reaches its reach, or the budget is spent.
+#[inline(never)]
+pub fn grow<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, tests: &mut u32) {
+    let start = *tests;
+    // Bit `ax` set: that axis is done.
+    let mut done = 0u32;
+    let mut ax = 0usize;
+    while done != 3 {
+        if done & (1 << ax) == 0 {
+            if *tests - start >= grow.budget {
+                return;
+            }
+            done |= step(m, grow, w, ax, tests) << ax;
+        }
+        ax ^= 1;
+    }
+}
+
+/// One column (`ax` 0) or row (`ax` 1) toward the goal. Returns 1 when that axis is done.
+#[inline(never)]
+fn step<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, ax: usize, tests: &mut u32) -> u32 {
+    let g = grow.goal[ax];
+    let r = grow.reach[ax];
+    let cur = w.window[ax];
+    // Toward the goal: up if the goal's far end lies above the window, down if its near end
+    // lies below; covered otherwise.
+    let up = g.hi > cur.hi;
+    if !up && g.lo >= cur.lo {
+        return 1;
+    }
+    let next = if up { cur.hi + 1 } else { cur.lo - 1 };
+    if next > r.hi || next < r.lo || cur.len() >= SIDE {
+        return 1;
+    }
+    let other = w.window[ax ^ 1];
+    let free = if ax == 0 {
+        col_free(m, next, other, tests)
+    } else {
+        row_free(m, next, other, tests)
+    };
+    if !free {
+        w.blocked[ax] = true;
+        return 1;
+    }
+    if up {
+        w.window[ax].hi = next;
+    } else {
+        w.window[ax].lo = next;
+    }
+    0
+}
+
+/// Point `d` along side `side` (0 bottom, 1 top, 2 left, 3 right) of the ring of radius `r`
+/// around `at`.
+#[inline(never)]
+fn ring(at: [i32; 2], r: i32, d: i32, side: u32) -> [i32; 2] {
+    match side {
+        0 => [at[0] + d, at[1] - r],
+        1 => [at[0] + d, at[1] + r],
+        2 => [at[0] - r, at[1] + d],
+        _ => [at[0] + r, at[1] + d],
+    }
+}
+
+/// Whether the block of `clear` pixels around `q` is free, and with `direct` the rectangle
+/// from `at` (with `from_next`, from `at`'s neighbour toward `q`) to `q` too.
+#[inline(never)]
+fn clear_at<M: Map + ?Sized>(
+    m: &mut M,
+    at: [i32; 2],
+    q: [i32; 2],
+    clear: i32,
+    direct: bool,
+    from_next: bool,
+    tests: &mut u32,
+) -> bool {
+    let s1 = Span {
+        lo: q[0] - clear,
+        hi: q[0] + clear,
+    };
+    let s2 = Span {
+        lo: q[1] - clear,
+        hi: q[1] + clear,
+    };
+    if !rect_free(m, s1, s2, tests) {
+        return false;
+    }
+    if !direct {
+        return true;
+    }
+    use crate::masks::{max, min};
+    // From the arm's own pixel, or (when `from_next`: the arm's pixel is marked) from its
+    // neighbour toward `q`, so the way out does not cross the obstacle it is in.
+    let sgn = |d: i32| (d >> 31) | ((-d as u32) >> 31) as i32;
+    let from = [
+        at[0] + (sgn(q[0] - at[0]) & -(from_next as i32)),
+        at[1] + (sgn(q[1] - at[1]) & -(from_next as i32)),
+    ];
+    let p1 = Span {
+        lo: min(q[0], from[0]),
+        hi: max(q[0], from[0]),
+    };
+    let p2 = Span {
+        lo: min(q[1], from[1]),
+        hi: max(q[1], from[1]),
+    };
+    rect_free(m, p1, p2, tests)
+}
+
+/// An escape search (fig. V.10): from the arm's pixel `at`, the nearest pixel (Chebyshev
+/// rings out to `max_r`) whose block of (2 `clear` + 1)^2 pixels is free, the one nearest
+/// `toward` among equals. With `direct`, the rectangle between `at` (with `from_next`,
+/// `at`'s neighbour toward the pixel) and the pixel must be free too (the way there must not
+/// cross an obstacle, each link moving on its own).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Escape {
+    /// The arm's pixel.
+    pub at: [i32; 2],
+    /// The goal's pixel (ties go toward it).
+    pub toward: [i32; 2],
+    /// Largest ring searched.
+    pub max_r: i32,
+    /// Free pixels each side of the target.
+    pub clear: i32,
+    /// The way there must be free.
+    pub direct: bool,
+    /// The way is checked from the arm's neighbour (the arm's own pixel is marked).
+    pub from_next: bool,
+}
+
+/// Runs the search `e`. `None` if there is no such pixel within reach.
+pub fn escape<M: Map + ?Sized>(m: &mut M, e: &Escape, tests: &mut u32) -> Option<[i32; 2]> {
+    let mut r = 1;
+    while r <= e.max_r {
+        let mut best = [0; 2];
+        let mut best_dist = i32::MAX;
+        let mut d = -r;
+        while d <= r {
+            let mut side = 0;
+            while side < 4 {
+                let q = ring(e.at, r, d, side);
+                let dist = (q[0] - e.toward[0]).abs() + (q[1] - e.toward[1]).abs();
+                if dist < best_dist && clear_at(m, e.at, q, e.clear, e.direct, e.from_next, tests) {
+                    best = q;
+                    best_dist = dist;
+                }
+                side += 1;
+            }
+            d += 1;
+        }
+        if best_dist != i32::MAX {
+            return Some(best);
+        }
+        r += 1;
+    }
+    None
+}

@@ -1,0 +1,257 @@
+//! The reflex board (issue 8): its image against the host bit for bit over scripted passes
+//! that reach every regime (free growth, walls, braking, escape, stall, holds for each input
+//! fault, planner and wand goals).
+
+use reflex::script::{scripted_pass, IN_WORDS, OUT_WORDS};
+use reflex::Reflex;
+use sim_host::emu::EmuBoard;
+use sim_host::image::Image;
+use sim_host::sim::Rng;
+use system_tests::images_dir;
+use vme_map::{ArrayBus, BoardId, GLOBAL_RAM_SIZE};
+
+/// Scratch RAM for the probe's script: above the image's code, below its data and bss at
+/// 0x80000 (linker/board.ld), room for 2,340 passes.
+const BUF: u32 = 0x0002_0000;
+/// Scratch RAM for the probe's results: above the data and bss, far below the stack.
+const OUT: u32 = 0x0009_0000;
+
+/// Global RAM with a C-space map of `disks` (x mm, y mm, r mm) drawn by the C-space logic.
+fn global_with(disks: &[(i32, i32, i32)]) -> Vec<u8> {
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    vme_map::init_header(&mut ArrayBus::new(&mut global));
+    for &(x, y, r) in disks {
+        let d = cspace::Disk {
+            x_um: x * 1000,
+            y_um: y * 1000,
+            r_um: r * 1000,
+        };
+        let im = cspace::images(&d).unwrap();
+        cspace::apply(
+            &im,
+            &mut cspace::BusCanvas(&mut ArrayBus::new(&mut global)),
+            cspace::Op::Draw,
+        );
+    }
+    global
+}
+
+/// A script of `n` passes: the host reflex drives a simple arm (speed toward its subgoal
+/// limited, the arrest point from its speed) among the map's obstacles, with goals from the
+/// planner and the wand, an obstacle moved onto the arm, torn and stale inputs in phases.
+fn script(global: &mut [u8], n: usize) -> Vec<u32> {
+    let mut r = Reflex::default();
+    let mut rng = Rng::new(8);
+    let mut th = [0.3f64, -0.4];
+    let mut w = [0.0f64; 2];
+    let mut sub = th;
+    let mut out = Vec::new();
+    let brake = [220.0, 700.0];
+    // A pixel deep inside an obstacle (all its neighbours marked): a goal there stalls the
+    // arm at the wall, and the arm put there must escape.
+    let inside = {
+        let mut g = ArrayBus::new(global);
+        let marked = |g: &mut ArrayBus, i1: i32, i2: i32| {
+            use vme_map::GlobalBus;
+            g.read_u32(vme_map::layout::cspace_counter(
+                (i1 & 127) as u32,
+                (i2 & 127) as u32,
+                0,
+            )) != 0
+        };
+        let mut found = None;
+        'search: for i2 in 0..128 {
+            for i1 in 0..128 {
+                if (-2..=2).all(|a| (-2..=2).all(|b| marked(&mut g, i1 + a, i2 + b))) {
+                    found = Some([i1, i2]);
+                    break 'search;
+                }
+            }
+        }
+        let p = found.expect("an obstacle with an interior");
+        let px = std::f64::consts::TAU / 128.0;
+        [(p[0] as f64 + 0.5) * px, (p[1] as f64 + 0.5) * px]
+    };
+    for k in 0..n {
+        if k == n * 6 / 10 {
+            th = inside;
+            w = [0.0; 2];
+        }
+        let t_us = 1000 * k as u32 + (rng.next_u64() % 300) as u32;
+        for i in 0..2 {
+            let e = sub[i] - th[i];
+            if e.abs() < 1e-4 && w[i].abs() < 0.2 {
+                w[i] = 0.0;
+                continue;
+            }
+            let want = e.signum() * (2.0 * brake[i] * e.abs()).sqrt().min(25.0);
+            let dv = (want - w[i]).clamp(-brake[i] * 1e-3, brake[i] * 1e-3);
+            w[i] += dv;
+            th[i] += w[i] * 1e-3;
+        }
+        let arrest = |i: usize| th[i] + w[i] * w[i].abs() / (2.0 * brake[i] / 1.2);
+        let phase = k * 10 / n;
+        let mut words = [0u32; IN_WORDS];
+        words[0] = (phase != 7 || k % 60 < 30) as u32;
+        let urad = |a: f64| (a * 1e6).round() as i32 as u32;
+        words[1] = urad(th[0]);
+        words[2] = urad(th[1]);
+        words[3] = urad(w[0]);
+        words[4] = urad(w[1]);
+        words[5] = urad(arrest(0));
+        words[6] = urad(arrest(1));
+        words[7] = t_us;
+        words[8] = if phase == 8 && k % 230 > 115 {
+            4242
+        } else {
+            3 * k as u32
+        };
+        match phase {
+            0..=3 => {
+                let g = [inside, inside, [2.8, -0.5], [0.2, 0.2]][phase];
+                words[9] = 1;
+                words[10] = urad(g[0]);
+                words[11] = urad(g[1]);
+                words[12] = if phase == 3 && k % 200 > 120 {
+                    7
+                } else {
+                    k as u32
+                };
+            }
+            4 | 5 => {
+                words[9] = 2;
+                words[10] = (300_000 - 1000 * (k % 200) as i32) as u32;
+                words[11] = (150_000 + 700 * (k % 150) as i32) as u32;
+            }
+            _ => words[9] = 0,
+        }
+        let frozen = phase == 6 && k % 200 > 120;
+        words[13] = if frozen { 17 } else { k as u32 };
+        words[16] = if phase == 9 && k % 200 > 100 {
+            5
+        } else {
+            k as u32 / 2
+        };
+        words[17] = (k % 97 == 0) as u32;
+        for e in 0..6 {
+            let b = 18 + 4 * e;
+            words[b] = if phase == 5 && e == 2 && k % 100 > 60 {
+                2
+            } else {
+                0
+            };
+            words[b + 1] = (k / 40) as u32;
+            words[b + 2] = 1;
+            words[b + 3] = if phase == 8 && e == 4 && k % 230 <= 115 {
+                30_000
+            } else {
+                200
+            };
+        }
+        out.extend_from_slice(&words);
+        let mut o = [0i32; OUT_WORDS];
+        scripted_pass(
+            &mut r,
+            &words,
+            &mut board_reflex::BusMap(&mut ArrayBus::new(global)),
+            &mut o,
+        );
+        if o[0] != 0 {
+            sub = [o[1] as f64 * 1e-6, o[2] as f64 * 1e-6];
+        }
+        if std::env::var("REFLEX_DEBUG").is_ok() && k < 460 && k % 10 == 0 {
+            eprintln!(
+                "{k}: th {th:.3?} w {w:.2?} sub {sub:.3?} flags {:#x} goal {inside:.3?}",
+                o[3]
+            );
+        }
+    }
+    out
+}
+
+fn host_run(global: &mut [u8], inputs: &[u32]) -> Vec<[i32; OUT_WORDS]> {
+    let mut r = Reflex::default();
+    inputs
+        .chunks(IN_WORDS)
+        .map(|w| {
+            let mut o = [0; OUT_WORDS];
+            let w: &[u32; IN_WORDS] = w.try_into().unwrap();
+            scripted_pass(
+                &mut r,
+                w,
+                &mut board_reflex::BusMap(&mut ArrayBus::new(global)),
+                &mut o,
+            );
+            o
+        })
+        .collect()
+}
+
+#[test]
+fn the_reflex_image_steps_like_the_host() {
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = global_with(&[(300, 300, 30), (-200, 350, 25), (100, -380, 40)]);
+    let n = 2300;
+    assert!(BUF as usize + 4 * IN_WORDS * n <= 0x8_0000);
+    let inputs = script(&mut global, n);
+    let host = host_run(&mut global, &inputs);
+    let mut b = EmuBoard::new(
+        BoardId::Reflex,
+        &img,
+        sim_host::devices::standalone(BoardId::Reflex),
+        &mut global,
+    );
+    let f = img
+        .symbol("reflex_probe_run")
+        .expect("reflex_probe_run in the image");
+    let out = OUT;
+    for (k, w) in inputs.iter().enumerate() {
+        let a = (BUF + 4 * k as u32) as usize;
+        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    }
+    let (ret, cycles) = b
+        .call(&mut global, f, &[BUF, n as u32, out], 4_000_000_000)
+        .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
+    assert_eq!(ret, 0);
+    let mut seen = std::collections::BTreeMap::new();
+    for (i, h) in host.iter().enumerate() {
+        let got: Vec<i32> = (0..OUT_WORDS)
+            .map(|k| {
+                let a = (out + 4 * (OUT_WORDS * i + k) as u32) as usize;
+                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+            })
+            .collect();
+        assert_eq!(got, h.to_vec(), "pass {i}");
+        for bit in 0..11 {
+            if h[3] & (1 << bit) != 0 {
+                *seen.entry(format!("flag{bit}")).or_insert(0) += 1;
+            }
+        }
+        if h[12] != 0 {
+            *seen.entry(format!("fault{}", h[12])).or_insert(0) += 1;
+        }
+    }
+    eprintln!("{n} passes in {cycles} cycles; seen {seen:?}");
+    use vme_map::records::reflex_flags as rf;
+    for (what, bit) in [
+        ("blocked", rf::BLOCKED1 | rf::BLOCKED2),
+        ("braking", rf::BRAKING),
+        ("hold", rf::HOLD),
+        ("planner", rf::FROM_PLANNER),
+        ("wand", rf::FROM_WAND),
+        ("at goal", rf::AT_GOAL),
+        ("escaping", rf::ESCAPING),
+        ("stalled", rf::STALLED),
+    ] {
+        assert!(
+            host.iter().any(|h| h[3] as u32 & bit != 0),
+            "the script never reached {what}"
+        );
+    }
+    for code in [1, 2, 3, 4, 5, 6, 7] {
+        assert!(
+            host.iter().any(|h| h[12] == code),
+            "the script never raised fault {code}"
+        );
+    }
+}
