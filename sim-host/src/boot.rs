@@ -243,17 +243,34 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
         sys.boards[0].io = crate::sensing_bench::lit_camera(1);
         sys.run_ms(600.0);
     }
+    // The reflex needs a servo, positions and a map that stay fresh: the host feeds them
+    // every 0.25 ms (the free-space case at rest of `sim-host bench reflex`).
+    let mut feed = (board == BoardId::Reflex).then(crate::reflex_bench::Feed::at_rest);
+    let quarter_ms = CPU_HZ / 4000;
+    if let Some(f) = feed.as_mut() {
+        for _ in 0..800 {
+            f.apply(&mut sys.bus());
+            sys.run_cycles(quarter_ms);
+        }
+    }
     sys.run_to_first_heartbeat(0);
     let hb0 = sys.heartbeat(board);
     let b = &mut sys.boards[0];
     let start = b.cycles;
     let end = start + (ms * CPU_HZ as f64 / 1000.0) as u64;
     let mut per: std::collections::HashMap<usize, u64> = std::collections::HashMap::new();
+    let mut next_feed = start + quarter_ms;
     while b.cycles < end && b.state == RunState::Running {
         let pc = b.cpu.pc;
         let c = b.step(&mut sys.global);
         let i = syms.partition_point(|(a, _)| *a <= pc);
         *per.entry(i).or_default() += c;
+        if b.cycles >= next_feed {
+            next_feed += quarter_ms;
+            if let Some(f) = feed.as_mut() {
+                f.apply(&mut ArrayBus::new(&mut sys.global));
+            }
+        }
     }
     let cycles = b.cycles - start;
     let loops = sys.heartbeat(board).wrapping_sub(hb0) as u64;

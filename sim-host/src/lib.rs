@@ -5,8 +5,10 @@
 //! * [`emu`]: a board's real image on an emulated 68020 and the bus it sees.
 //! * [`devices`]: the boards' private I/O at register level.
 //! * [`boot`]: powering the system up: global RAM header, boards out of reset, heartbeats.
+//! * [`campaign`]: the reflex's safety campaign over random scenes.
 //! * [`plant`]: the arm: amplifiers, motors, bands with their resonance, friction.
 //! * [`plots`]: PNG pictures of a run.
+//! * [`reflex_bench`]: the reflex image's loop and pixel-test rates, and its cost to a free move.
 //! * [`run`]: a scenario run and its run directory.
 //! * [`scenario`]: scenario files (TOML) and their errors.
 //! * [`servo_bench`]: step responses of the servo against the thesis baselines.
@@ -16,6 +18,7 @@
 
 pub mod bench;
 pub mod boot;
+pub mod campaign;
 pub mod cspace_bench;
 pub mod cspace_db;
 pub mod cspace_oracle;
@@ -26,6 +29,7 @@ pub mod image;
 pub mod optics;
 pub mod plant;
 pub mod plots;
+pub mod reflex_bench;
 pub mod run;
 pub mod scenario;
 pub mod sensing_bench;

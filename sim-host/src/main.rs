@@ -39,9 +39,10 @@ enum Cmd {
     /// Measurements: `sim` = real-time factor of the native simulation (`--seconds`, `--reps`);
     /// `servo` = step responses against the thesis's baselines, with pictures (`--out`);
     /// `cspace` = the C-space image's cycles per obstacle update and refresh rates with 1-3
-    /// boards.
+    /// boards; `reflex` = the reflex image's loop and pixel-test rates and its cost to a free
+    /// move.
     Bench {
-        /// What to measure (sim, servo, cspace).
+        /// What to measure (sim, servo, cspace, sensing, reflex).
         what: String,
         /// Simulated seconds per repetition.
         #[arg(long, default_value_t = 10.0)]
@@ -58,6 +59,31 @@ enum Cmd {
         /// `sensing`: the seed of the sensor model and the survey.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+    },
+    /// Safety campaigns: `reflex` runs random scenes (1-5 disks, random start in free space
+    /// and wand goal) with the sensing, C-space, servo and reflex boards and the collision
+    /// oracle at every plant step: `--scenes` static ones, then `--moving` ones whose disks
+    /// circle the shoulder at C-space border speeds up to 30 pixels/s. Writes
+    /// `<out>/static/` and `<out>/moving/` (summary.json, scenes.csv, a scenario file per
+    /// scene with a collision); exits 1 if any scene had a collision.
+    Campaign {
+        /// What to run (reflex).
+        what: String,
+        /// Static scenes.
+        #[arg(long, default_value_t = 2000)]
+        scenes: u64,
+        /// Moving scenes (default: a quarter of --scenes).
+        #[arg(long)]
+        moving: Option<u64>,
+        /// Campaign seed: scene i of seed s is always the same scene.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output directory.
+        #[arg(long, default_value = "out/campaign-reflex")]
+        out: PathBuf,
+        /// Threads (default: the machine's cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Profile one board image on the emulated 68020: cycles per main-loop pass and the
     /// functions they go to.
@@ -153,7 +179,7 @@ fn main() -> ExitCode {
                         s.goal_reached.map_or("-".into(), |g| if g { "reached".into() } else { format!("not reached ({:.1} mm off)", s.final_goal_error_m.unwrap_or(0.0) * 1e3) })
                     );
                     println!(
-                        "wrote trace.csv, summary.json, joints.png and task.png to {}",
+                        "wrote trace.csv, summary.json, joints.png, task.png and cspace.png to {}",
                         out.display()
                     );
                     ExitCode::SUCCESS
@@ -164,6 +190,72 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Cmd::Campaign {
+            what,
+            scenes,
+            moving,
+            seed,
+            out,
+            threads,
+        } => {
+            if what != "reflex" {
+                eprintln!("sim-host: campaign: unknown campaign {what:?} (known: reflex)");
+                return ExitCode::from(2);
+            }
+            let threads = threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let mut any = false;
+            for (kind, n) in [
+                (sim_host::campaign::Kind::Static, scenes),
+                (
+                    sim_host::campaign::Kind::Moving,
+                    moving.unwrap_or(scenes / 4),
+                ),
+            ] {
+                if n == 0 {
+                    continue;
+                }
+                let name = format!("{kind:?}").to_lowercase();
+                let bar = indicatif::ProgressBar::new(n);
+                bar.set_message(name.clone());
+                let dir = out.join(&name);
+                match sim_host::campaign::run_to_dir(kind, seed, n, threads, &dir, &|| bar.inc(1)) {
+                    Ok(s) => {
+                        bar.finish_and_clear();
+                        println!(
+                            "reflex campaign, {name}: {} scenes (seed {seed}), {} with collisions ({} contacts), min clearance {:.1} mm; goals reached {} ({:.1}%), time to goal median {:.2} s, p95 {:.2} s, max {:.2} s; stalled {}; escapes in {} scenes; holds in {}; {:.0} s wall -> {}",
+                            s.scenes,
+                            s.scenes_with_collisions,
+                            s.collisions,
+                            s.min_clearance_m * 1e3,
+                            s.goals_reached,
+                            100.0 * s.goals_reached as f64 / s.scenes as f64,
+                            s.time_to_goal_s[0],
+                            s.time_to_goal_s[1],
+                            s.time_to_goal_s[2],
+                            s.stalled,
+                            s.scenes_with_escapes,
+                            s.scenes_with_holds,
+                            s.wall_s,
+                            dir.display()
+                        );
+                        if !s.collision_scenes.is_empty() {
+                            println!("  scenes with collisions: {:?} (replay: sim-host run {}/collision-<i>.toml)", s.collision_scenes, dir.display());
+                            any = true;
+                        }
+                    }
+                    Err(e) => {
+                        eprintln!("sim-host: {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
+            if any {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
         Cmd::Bench {
             what,
             seconds,
@@ -171,59 +263,73 @@ fn main() -> ExitCode {
             out,
             quick,
             seed,
-        } => match what.as_str() {
-            "sim" => {
-                let r = sim_host::bench::sim(seconds, reps);
-                println!("{r}");
-                ExitCode::SUCCESS
-            }
-            "cspace" => {
-                match sim_host::cspace_bench::report(&sim_host::boot::default_images_dir()) {
-                    Ok(r) => {
-                        print!("{r}");
-                        ExitCode::SUCCESS
-                    }
-                    Err(e) => {
-                        eprintln!("sim-host: bench cspace: {e} (build the images first: cargo xtask images)");
-                        ExitCode::FAILURE
-                    }
-                }
-            }
-            "sensing" => {
-                let out = out.unwrap_or_else(|| PathBuf::from("out/bench-sensing"));
-                let size = if quick {
-                    sim_host::sensing_bench::Size::quick()
-                } else {
-                    sim_host::sensing_bench::Size::full()
-                };
-                match sim_host::sensing_bench::report(&out, size, seed) {
-                    Ok(r) => {
-                        print!("{r}");
-                        ExitCode::SUCCESS
-                    }
-                    Err(e) => {
-                        eprintln!("sim-host: bench sensing: {e}");
-                        ExitCode::FAILURE
-                    }
-                }
-            }
-            "servo" => match sim_host::servo_bench::report(
-                &out.unwrap_or_else(|| PathBuf::from("out/bench-servo")),
-            ) {
-                Ok(r) => {
-                    print!("{r}");
+        } => {
+            match what.as_str() {
+                "sim" => {
+                    let r = sim_host::bench::sim(seconds, reps);
+                    println!("{r}");
                     ExitCode::SUCCESS
                 }
-                Err(e) => {
-                    eprintln!("sim-host: bench servo: {e}");
-                    ExitCode::FAILURE
+                "reflex" => {
+                    match sim_host::reflex_bench::report(&sim_host::boot::default_images_dir()) {
+                        Ok(r) => {
+                            print!("{r}");
+                            ExitCode::SUCCESS
+                        }
+                        Err(e) => {
+                            eprintln!("sim-host: bench reflex: {e} (build the images first: cargo xtask images)");
+                            ExitCode::FAILURE
+                        }
+                    }
                 }
-            },
-            other => {
-                eprintln!("sim-host: unknown benchmark {other:?} (sim, servo, cspace, sensing)");
-                ExitCode::from(2)
+                "cspace" => {
+                    match sim_host::cspace_bench::report(&sim_host::boot::default_images_dir()) {
+                        Ok(r) => {
+                            print!("{r}");
+                            ExitCode::SUCCESS
+                        }
+                        Err(e) => {
+                            eprintln!("sim-host: bench cspace: {e} (build the images first: cargo xtask images)");
+                            ExitCode::FAILURE
+                        }
+                    }
+                }
+                "sensing" => {
+                    let out = out.unwrap_or_else(|| PathBuf::from("out/bench-sensing"));
+                    let size = if quick {
+                        sim_host::sensing_bench::Size::quick()
+                    } else {
+                        sim_host::sensing_bench::Size::full()
+                    };
+                    match sim_host::sensing_bench::report(&out, size, seed) {
+                        Ok(r) => {
+                            print!("{r}");
+                            ExitCode::SUCCESS
+                        }
+                        Err(e) => {
+                            eprintln!("sim-host: bench sensing: {e}");
+                            ExitCode::FAILURE
+                        }
+                    }
+                }
+                "servo" => match sim_host::servo_bench::report(
+                    &out.unwrap_or_else(|| PathBuf::from("out/bench-servo")),
+                ) {
+                    Ok(r) => {
+                        print!("{r}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("sim-host: bench servo: {e}");
+                        ExitCode::FAILURE
+                    }
+                },
+                other => {
+                    eprintln!("sim-host: unknown benchmark {other:?} (sim, servo, cspace, sensing, reflex)");
+                    ExitCode::from(2)
+                }
             }
-        },
+        }
         Cmd::Profile {
             board,
             images,

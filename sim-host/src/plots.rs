@@ -22,6 +22,10 @@ pub struct Sample {
     pub omega_rad_s: [f64; 2],
     /// Motor torques at the links.
     pub torque_nm: [f64; 2],
+    /// The reflex subgoal published (absolute angles; `None` before the first).
+    pub subgoal_rad: Option<[f64; 2]>,
+    /// The reflex's flags word.
+    pub reflex_flags: u32,
 }
 
 fn font() -> Result<(), String> {
@@ -375,6 +379,149 @@ fn panel(
         .border_style(BLACK)
         .draw()
         .map_err(err)
+}
+
+/// What the C-space path picture shows besides the arm's path.
+pub struct PathPicture<'a> {
+    /// Pixels marked in the map (`[i2 * 128 + i1]`).
+    pub marked: &'a [bool],
+    /// Pixels that hold a colliding configuration (the exact image), same indexing.
+    pub exact: &'a [bool],
+    /// The goal (absolute angles), if any.
+    pub goal: Option<[f64; 2]>,
+}
+
+/// Writes a C-space picture of a run (like thesis figs. V.6-V.10 and VI.3-VI.5): the map at
+/// the end (marked pixels light, those holding a collision dark), the arm's path in joint
+/// space, the reflex subgoals it was given (dots; escapes and stops in other colours), its
+/// start and end, and the goal. Angles are shown in -pi..pi (the torus cut open).
+pub fn cspace_path(
+    path: &Path,
+    title: &str,
+    pic: &PathPicture,
+    s: &[Sample],
+) -> Result<(), String> {
+    use std::f64::consts::{PI, TAU};
+    use vme_map::records::reflex_flags as rf;
+    font()?;
+    let root = BitMapBackend::new(path, (760, 760)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let mut c = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-PI..PI, -PI..PI)
+        .map_err(err)?;
+    c.configure_mesh()
+        .disable_mesh()
+        .x_desc("theta1 (rad)")
+        .y_desc("theta2 (rad, absolute)")
+        .draw()
+        .map_err(err)?;
+    let px = TAU / 128.0;
+    let wrap = |a: f64| (a + PI).rem_euclid(TAU) - PI;
+    let cell = |i: usize| wrap(i as f64 * px);
+    let mut rects = Vec::new();
+    for i2 in 0..128usize {
+        for i1 in 0..128usize {
+            let k = i2 * 128 + i1;
+            let col = if pic.exact[k] {
+                Some(RGBColor(60, 60, 60))
+            } else if pic.marked[k] {
+                Some(RGBColor(170, 190, 225))
+            } else {
+                None
+            };
+            if let Some(col) = col {
+                let (x, y) = (cell(i1), cell(i2));
+                rects.push(Rectangle::new([(x, y), (x + px, y + px)], col.filled()));
+            }
+        }
+    }
+    c.draw_series(rects).map_err(err)?;
+    for (label, col) in [
+        ("map: collides", RGBColor(60, 60, 60)),
+        ("map: margin", RGBColor(170, 190, 225)),
+    ] {
+        c.draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], col.filled()));
+    }
+    // The path, cut where it wraps around the torus.
+    let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    let mut last: Option<(f64, f64)> = None;
+    for q in s {
+        let p = (wrap(q.theta_rad[0]), wrap(q.theta_rad[1]));
+        if let Some(l) = last {
+            if (p.0 - l.0).abs() > PI || (p.1 - l.1).abs() > PI {
+                pieces.push(Vec::new());
+            }
+        }
+        pieces.last_mut().expect("one piece").push(p);
+        last = Some(p);
+    }
+    for (k, piece) in pieces.into_iter().enumerate() {
+        let series = c
+            .draw_series(LineSeries::new(piece, RED.stroke_width(2)))
+            .map_err(err)?;
+        if k == 0 {
+            series
+                .label("arm")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 14, y)], RED.stroke_width(2)));
+        }
+    }
+    let dots = |want: u32, none: u32| {
+        s.iter()
+            .filter(move |q| q.reflex_flags & want == want && q.reflex_flags & none == 0)
+            .filter_map(|q| q.subgoal_rad)
+            .map(|g| (wrap(g[0]), wrap(g[1])))
+            .collect::<Vec<_>>()
+    };
+    for (label, want, none, col) in [
+        (
+            "subgoal",
+            0,
+            rf::ESCAPING | rf::BRAKING | rf::HOLD,
+            RGBColor(30, 110, 220),
+        ),
+        ("subgoal, braking", rf::BRAKING, 0, RGBColor(240, 150, 0)),
+        ("subgoal, escaping", rf::ESCAPING, 0, RGBColor(160, 0, 160)),
+        ("hold (fault)", rf::HOLD, 0, RGBColor(0, 0, 0)),
+    ] {
+        let pts = dots(want, none);
+        if pts.is_empty() {
+            continue;
+        }
+        c.draw_series(pts.into_iter().map(|p| Circle::new(p, 2, col.filled())))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| Circle::new((x + 5, y), 3, col.filled()));
+    }
+    if let (Some(a), Some(b)) = (s.first(), s.last()) {
+        for (label, q, col) in [("start", a, GREEN), ("end", b, BLACK)] {
+            let p = (wrap(q.theta_rad[0]), wrap(q.theta_rad[1]));
+            c.draw_series([TriangleMarker::new(p, 8, col.filled())])
+                .map_err(err)?
+                .label(label)
+                .legend(move |(x, y)| TriangleMarker::new((x + 5, y), 6, col.filled()));
+        }
+    }
+    if let Some(g) = pic.goal {
+        let p = (wrap(g[0]), wrap(g[1]));
+        c.draw_series([Cross::new(p, 8, BLUE.stroke_width(3))])
+            .map_err(err)?
+            .label("goal")
+            .legend(|(x, y)| Cross::new((x + 5, y), 5, BLUE.stroke_width(2)));
+    }
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
 }
 
 /// The sensing bench's picture (like thesis fig. II.7): on the left the calibration scan's

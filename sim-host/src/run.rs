@@ -5,7 +5,7 @@
 //!   any obstacle, the published records (servo state, reflex subgoal, planner goal) and
 //!   every board's heartbeat. Deterministic: the same scenario and seed give the same bytes.
 //! * `summary.json`: the run's figures.
-//! * `joints.png`, `task.png`: pictures of the run (module `plots`).
+//! * `joints.png`, `task.png`, `cspace.png`: pictures of the run (module `plots`).
 
 use crate::plots::Sample;
 use crate::scenario::Scenario;
@@ -154,24 +154,69 @@ pub fn trace_row(sim: &mut Sim, out: &mut String) {
 }
 
 /// The plot sample at the simulation's current time.
-fn sample(sim: &Sim) -> Sample {
+pub fn sample(sim: &mut Sim) -> Sample {
     let l = &sim.plant.links;
+    let (theta_rad, omega_rad_s, torque_nm) = (
+        [l[0].state.link_rad, l[1].state.link_rad],
+        [l[0].state.link_rad_s, l[1].state.link_rad_s],
+        [l[0].motor_torque_nm(), l[1].motor_torque_nm()],
+    );
+    let sub = match vme_map::REFLEX_SUBGOAL.read(&mut sim.bus()) {
+        Ok((r, seq)) if seq != 0 => Some(r),
+        _ => None,
+    };
     Sample {
         t_s: sim.t_s(),
-        theta_rad: [l[0].state.link_rad, l[1].state.link_rad],
-        omega_rad_s: [l[0].state.link_rad_s, l[1].state.link_rad_s],
-        torque_nm: [l[0].motor_torque_nm(), l[1].motor_torque_nm()],
+        theta_rad,
+        omega_rad_s,
+        torque_nm,
+        subgoal_rad: sub.map(|r| [r.goal1_urad as f64 * 1e-6, r.goal2_urad as f64 * 1e-6]),
+        reflex_flags: sub.map_or(0, |r| r.flags),
     }
+}
+
+/// The C-space map in global RAM now: which pixels are marked (`[i2 * 128 + i1]`).
+pub fn marked_pixels(sim: &mut Sim) -> Vec<bool> {
+    use vme_map::layout::{cspace_counter, CSPACE_STRIPES};
+    let mut g = sim.bus();
+    let stripes: Vec<u32> = (0..128)
+        .map(|i| g.read_u32(CSPACE_STRIPES + 4 * i))
+        .collect();
+    let mut v = Vec::with_capacity(128 * 128);
+    for i2 in 0..128 {
+        for i1 in 0..128 {
+            v.push(g.read_u32(cspace_counter(i1, i2, 0)) != 0 || stripes[i1 as usize] != 0);
+        }
+    }
+    v
+}
+
+/// The pixels that hold a configuration colliding with one of `disks` (the exact oracle).
+pub fn exact_pixels(disks: &[arm::geometry::Disk]) -> Vec<bool> {
+    let mut v = Vec::with_capacity(128 * 128);
+    for i2 in 0..128 {
+        for i1 in 0..128 {
+            v.push(disks.iter().any(|d| {
+                let c = cspace::Disk {
+                    x_um: (d.x_m * 1e6).round() as i32,
+                    y_um: (d.y_m * 1e6).round() as i32,
+                    r_um: (d.r_m * 1e6).round() as i32,
+                };
+                crate::cspace_oracle::pixel(&c, i1, i2) == crate::cspace_oracle::Verdict::Collides
+            }));
+        }
+    }
+    v
 }
 
 /// Runs `scenario`; returns the trace text and the summary.
 pub fn run(scenario: &Scenario, opts: RunOptions) -> (String, Summary) {
-    let (trace, summary, _) = run_sampled(scenario, opts);
+    let (trace, summary, _, _) = run_sampled(scenario, opts);
     (trace, summary)
 }
 
-/// Runs `scenario`; returns the trace text, the summary and the plot samples.
-pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, Vec<Sample>) {
+/// Runs `scenario`; returns the trace text, the summary, the plot samples and the end state.
+pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, Vec<Sample>, End) {
     let mut sim = Sim::new(scenario.config.clone());
     let total = (scenario.config.duration_s / scenario.config.dt_s).round() as u64;
     // The bar appears only once a run has taken more than a second of wall time.
@@ -182,13 +227,13 @@ pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, V
     let mut shown = false;
     let mut trace = trace_header(&sim);
     let start = Instant::now();
-    let mut samples = vec![sample(&sim)];
+    let mut samples = vec![sample(&mut sim)];
     trace_row(&mut sim, &mut trace);
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(opts.trace_every) {
             trace_row(&mut sim, &mut trace);
-            samples.push(sample(&sim));
+            samples.push(sample(&mut sim));
         }
         if sim.steps.is_multiple_of(2000) {
             if !opts.quiet && !shown && start.elapsed().as_secs_f64() > 1.0 {
@@ -201,7 +246,36 @@ pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, V
     bar.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
     let summary = summarize(scenario, &mut sim, wall_s);
-    (trace, summary, samples)
+    (trace, summary, samples, End::of(&mut sim))
+}
+
+/// The state of the world at the end of a run, for the C-space picture.
+pub struct End {
+    /// Marked map pixels.
+    pub marked: Vec<bool>,
+    /// Exact image of the obstacles where they are at the end.
+    pub exact: Vec<bool>,
+    /// The goal the reflex was using.
+    pub goal: Option<[f64; 2]>,
+}
+
+impl End {
+    /// Reads the end state off `sim`.
+    pub fn of(sim: &mut Sim) -> Self {
+        let t = sim.t_s();
+        let disks: Vec<_> = sim.cfg.obstacles.iter().map(|o| o.at(t)).collect();
+        let goal = match vme_map::REFLEX_STATUS.read(&mut sim.bus()) {
+            Ok((r, seq)) if seq != 0 => {
+                Some([r.goal1_urad as f64 * 1e-6, r.goal2_urad as f64 * 1e-6])
+            }
+            _ => None,
+        };
+        End {
+            marked: marked_pixels(sim),
+            exact: exact_pixels(&disks),
+            goal,
+        }
+    }
 }
 
 fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
@@ -247,12 +321,12 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
     }
 }
 
-/// Runs `scenario` and writes `trace.csv`, `summary.json`, `joints.png` and `task.png`
-/// into `out`.
+/// Runs `scenario` and writes `trace.csv`, `summary.json`, `joints.png`, `task.png` and
+/// `cspace.png` into `out`.
 pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
     std::fs::create_dir_all(out).map_err(io)?;
-    let (trace, summary, samples) = run_sampled(scenario, opts);
+    let (trace, summary, samples, end) = run_sampled(scenario, opts);
     std::fs::write(out.join("trace.csv"), trace).map_err(io)?;
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
     std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;
@@ -265,6 +339,16 @@ pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> Result<S
         &out.join("task.png"),
         &format!("{}: task space", scenario.name),
         &scenario.config,
+        &samples,
+    )?;
+    crate::plots::cspace_path(
+        &out.join("cspace.png"),
+        &format!("{}: C-space", scenario.name),
+        &crate::plots::PathPicture {
+            marked: &end.marked,
+            exact: &end.exact,
+            goal: end.goal,
+        },
         &samples,
     )?;
     Ok(summary)

@@ -225,7 +225,7 @@ enum Native {
     Sensing(Box<board_sensing::Board>),
     Cspace(board_cspace::Board),
     Servo(board_servo::Board),
-    Reflex(board_reflex::Board),
+    Reflex(Box<board_reflex::Board>),
     Planner(board_planner::Board),
 }
 
@@ -234,7 +234,7 @@ impl Native {
         match id {
             BoardId::Sensing => Native::Sensing(Box::new(board_sensing::Board::new())),
             BoardId::Servo => Native::Servo(board_servo::Board::new()),
-            BoardId::Reflex => Native::Reflex(board_reflex::Board::new()),
+            BoardId::Reflex => Native::Reflex(Box::new(board_reflex::Board::new())),
             BoardId::Planner => Native::Planner(board_planner::Board::new()),
             c => Native::Cspace(board_cspace::Board::new(c)),
         }
@@ -253,7 +253,7 @@ impl Native {
             Native::Sensing(b) => b.poll(&mut &mut *g, io),
             Native::Cspace(b) => b.poll(&mut &mut *g, io),
             Native::Servo(b) => b.poll(g, io),
-            Native::Reflex(b) => b.poll(g, io),
+            Native::Reflex(b) => b.poll(&mut &mut *g, io),
             Native::Planner(b) => b.poll(g, io),
         };
     }
@@ -349,6 +349,13 @@ impl Sim {
         let mut rng = Rng::new(cfg.seed);
         let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
         vme_map::init_header(&mut ArrayBus::new(&mut global));
+        // The host knows its obstacles' sizes (the thesis's were cylinders of known size);
+        // the C-space boards draw each with its own radius.
+        for (k, o) in cfg.obstacles.iter().enumerate().take(6) {
+            let r_um = (o.start.r_m * 1e6).ceil() as u32;
+            ArrayBus::new(&mut global)
+                .write_u32(vme_map::layout::OBSTACLE_RADII + 4 * k as u32, r_um);
+        }
         let plant = Plant::new(cfg.start_rad, cfg.dt_s);
         // The counters are zeroed with the arm at angle 0 before power-up, so they read the
         // start pose (the servo takes its first latch as absolute: crates/servo).

@@ -1,0 +1,398 @@
+//! The reflex's safety campaign (issue 8, thesis ch. V): random scenes run with the sensing,
+//! C-space, servo and reflex boards (no planner: the goal is the wand), the collision oracle
+//! checked at every plant step.
+//!
+//! A static scene has 1-5 disks of random radius and place and a random goal (the wand where
+//! the tip is at a random pose, never inside a disk); the arm starts at rest in free space
+//! (at least 10 mm from every disk). A moving scene is the same with its disks circling the
+//! shoulder, all the same way, each at its own speed up to [`MAX_BORDER_RAD_S`]: a disk's
+//! C-space image then slides rigidly along the diagonal (thesis ch. IV section 5, the polar
+//! shift), so its borders move at exactly that speed, the thesis's quasi-static bound of 30
+//! pixels per second (line ~1597). The arm starts at least 30 mm from every disk.
+//!
+//! Scenes are independent and seeded by the campaign seed and their index, so a campaign's
+//! results do not depend on how many threads run it; a scene with a collision is written
+//! out as a scenario file that replays it (`sim-host run`).
+
+use crate::sim::{Config, Motion, Obstacle, Rng, Sim, WandPath};
+use arm::geometry::{tip, Disk, Pose};
+use serde::Serialize;
+use std::f64::consts::{PI, TAU};
+use std::fmt::Write as _;
+use std::path::Path;
+use vme_map::BoardId;
+
+/// The fastest a moving scene's disks circle the shoulder: 30 pixels of 2 pi / 128 per
+/// second.
+pub const MAX_BORDER_RAD_S: f64 = 30.0 * TAU / 128.0;
+
+/// Which kind of scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Disks at rest.
+    Static,
+    /// Disks circling the shoulder (quasi-static).
+    Moving,
+}
+
+impl Kind {
+    /// Simulated seconds per scene.
+    pub fn duration_s(self) -> f64 {
+        match self {
+            Kind::Static => 3.0,
+            Kind::Moving => 4.0,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Static => "static",
+            Kind::Moving => "moving",
+        }
+    }
+}
+
+/// One random scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Its index in the campaign.
+    pub index: u64,
+    /// The run's configuration.
+    pub config: Config,
+    /// The goal pose the wand was placed for.
+    pub goal_rad: [f64; 2],
+}
+
+/// The scene `index` of a campaign with seed `seed`.
+pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
+    let mut rng = Rng::new(
+        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03)
+            ^ (kind as u64) << 63,
+    );
+    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+    let clear_m = match kind {
+        Kind::Static => 0.010,
+        Kind::Moving => 0.030,
+    };
+    loop {
+        let n = 1 + (u(0.0, 5.0) as usize).min(4);
+        let spin = if u(0.0, 1.0) < 0.5 { 1.0 } else { -1.0 };
+        let mut obstacles = Vec::new();
+        for _ in 0..n {
+            let d = u(0.12, 0.55);
+            let a = u(-PI, PI);
+            let r = u(0.010, 0.035);
+            let start = Disk {
+                x_m: d * a.cos(),
+                y_m: d * a.sin(),
+                r_m: r,
+            };
+            let motion = match kind {
+                Kind::Static => Motion::Static,
+                Kind::Moving => {
+                    let w = u(0.2, 1.0) * MAX_BORDER_RAD_S * spin;
+                    Motion::Circle {
+                        cx_m: 0.0,
+                        cy_m: 0.0,
+                        period_s: TAU / w,
+                    }
+                }
+            };
+            obstacles.push(Obstacle { start, motion });
+        }
+        // A start in free space, and a goal the wand can be held at.
+        let mut start = None;
+        for _ in 0..200 {
+            let s = [u(-PI, PI), u(-PI, PI)];
+            let p = Pose::new(s[0], s[1]);
+            if obstacles.iter().all(|o| p.clearance_m(&o.start) >= clear_m) {
+                start = Some(s);
+                break;
+            }
+        }
+        let Some(start_rad) = start else { continue };
+        let mut goal = None;
+        for _ in 0..200 {
+            let g = [u(-PI, PI), u(-PI, PI)];
+            let (x, y) = tip(g[0], g[1]);
+            if obstacles
+                .iter()
+                .all(|o| (x - o.start.x_m).hypot(y - o.start.y_m) > o.start.r_m + 0.01)
+            {
+                goal = Some(g);
+                break;
+            }
+        }
+        let Some(goal_rad) = goal else { continue };
+        let (wx, wy) = tip(goal_rad[0], goal_rad[1]);
+        let config = Config {
+            seed: seed ^ index,
+            duration_s: kind.duration_s(),
+            start_rad,
+            obstacles,
+            wand: WandPath {
+                points: vec![(0.0, wx, wy)],
+            },
+            boards: crate::sim::DEFAULT_PERIODS_S
+                .iter()
+                .copied()
+                .filter(|(b, _)| *b != BoardId::Planner)
+                .collect(),
+            ..Config::default()
+        };
+        return Scene {
+            index,
+            config,
+            goal_rad,
+        };
+    }
+}
+
+/// What one scene did.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SceneResult {
+    /// Its index.
+    pub index: u64,
+    /// Separate contacts between the arm and a disk (exact outline, every plant step).
+    pub collisions: u64,
+    /// Smallest clearance, m.
+    pub min_clearance_m: f64,
+    /// Time the tip first came within 1 cm of the wand, s.
+    pub goal_time_s: Option<f64>,
+    /// Tip distance to the wand at the end, m.
+    pub final_error_m: f64,
+    /// The reflex flagged a stall at the end.
+    pub stalled: bool,
+    /// Milliseconds the reflex spent escaping (sampled each ms).
+    pub escape_ms: u32,
+    /// Milliseconds the reflex held the arm for a bad input.
+    pub hold_ms: u32,
+}
+
+/// Runs one scene.
+pub fn run_scene(s: &Scene) -> SceneResult {
+    use vme_map::records::reflex_flags as rf;
+    let mut sim = Sim::new(s.config.clone());
+    let per_ms = (1e-3 / sim.cfg.dt_s).round() as u64;
+    let (wx, wy) = sim.cfg.wand.at(0.0).expect("a wand");
+    let mut goal_time_s = None;
+    let (mut escape_ms, mut hold_ms, mut flags) = (0, 0, 0);
+    while !sim.done() {
+        sim.step();
+        if sim.steps.is_multiple_of(per_ms) {
+            let [a, b] = sim.plant.angles_rad();
+            let (x, y) = tip(a, b);
+            if goal_time_s.is_none() && (x - wx).hypot(y - wy) <= 0.01 {
+                goal_time_s = Some(sim.t_s());
+            }
+            if let Ok((r, _)) = vme_map::REFLEX_SUBGOAL.read(&mut sim.bus()) {
+                flags = r.flags;
+                escape_ms += (r.flags & rf::ESCAPING != 0) as u32;
+                hold_ms += (r.flags & rf::HOLD != 0) as u32;
+            }
+        }
+    }
+    let [a, b] = sim.plant.angles_rad();
+    let (x, y) = tip(a, b);
+    SceneResult {
+        index: s.index,
+        collisions: sim.collisions.events,
+        min_clearance_m: sim.collisions.min_clearance_m,
+        goal_time_s,
+        final_error_m: (x - wx).hypot(y - wy),
+        stalled: flags & rf::STALLED != 0,
+        escape_ms,
+        hold_ms,
+    }
+}
+
+/// A campaign's figures (`summary.json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Static or moving.
+    pub kind: Kind,
+    /// Campaign seed.
+    pub seed: u64,
+    /// Scenes run.
+    pub scenes: u64,
+    /// Simulated seconds per scene.
+    pub duration_s: f64,
+    /// Scenes with at least one collision (must be 0).
+    pub scenes_with_collisions: u64,
+    /// Separate contacts over all scenes.
+    pub collisions: u64,
+    /// Smallest clearance over all scenes, m.
+    pub min_clearance_m: f64,
+    /// Scenes whose tip came within 1 cm of the wand.
+    pub goals_reached: u64,
+    /// Median, 95th percentile and largest time to the goal over those scenes, s.
+    pub time_to_goal_s: [f64; 3],
+    /// Scenes the reflex ended stalled in (goal blocked: a planner's job).
+    pub stalled: u64,
+    /// Scenes in which the reflex escaped from an obstacle at least once.
+    pub scenes_with_escapes: u64,
+    /// Scenes in which the reflex held the arm for a bad input.
+    pub scenes_with_holds: u64,
+    /// Indices of the scenes with collisions.
+    pub collision_scenes: Vec<u64>,
+    /// Wall-clock seconds.
+    pub wall_s: f64,
+}
+
+/// Runs `n` scenes of `kind` with seed `seed` on `threads` threads (results in index order,
+/// the same whatever `threads`). `progress` is called after each scene.
+pub fn campaign(
+    kind: Kind,
+    seed: u64,
+    n: u64,
+    threads: usize,
+    progress: &(dyn Fn() + Sync),
+) -> (Summary, Vec<SceneResult>) {
+    let start = std::time::Instant::now();
+    let next = std::sync::atomic::AtomicU64::new(0);
+    let mut results: Vec<SceneResult> = std::thread::scope(|sc| {
+        let handles: Vec<_> = (0..threads.max(1))
+            .map(|_| {
+                sc.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if i >= n {
+                            return mine;
+                        }
+                        mine.push(run_scene(&scene(kind, seed, i)));
+                        progress();
+                    }
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a scene thread"))
+            .collect()
+    });
+    results.sort_by_key(|r| r.index);
+    let mut times: Vec<f64> = results.iter().filter_map(|r| r.goal_time_s).collect();
+    times.sort_by(f64::total_cmp);
+    let q = |p: f64| {
+        if times.is_empty() {
+            f64::NAN
+        } else {
+            times[((times.len() - 1) as f64 * p).round() as usize]
+        }
+    };
+    let summary = Summary {
+        kind,
+        seed,
+        scenes: n,
+        duration_s: kind.duration_s(),
+        scenes_with_collisions: results.iter().filter(|r| r.collisions > 0).count() as u64,
+        collisions: results.iter().map(|r| r.collisions).sum(),
+        min_clearance_m: results
+            .iter()
+            .map(|r| r.min_clearance_m)
+            .fold(f64::INFINITY, f64::min),
+        goals_reached: times.len() as u64,
+        time_to_goal_s: [q(0.5), q(0.95), q(1.0)],
+        stalled: results.iter().filter(|r| r.stalled).count() as u64,
+        scenes_with_escapes: results.iter().filter(|r| r.escape_ms > 0).count() as u64,
+        scenes_with_holds: results.iter().filter(|r| r.hold_ms > 0).count() as u64,
+        collision_scenes: results
+            .iter()
+            .filter(|r| r.collisions > 0)
+            .map(|r| r.index)
+            .collect(),
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    (summary, results)
+}
+
+/// A scenario file that replays scene `s` (`sim-host run`).
+pub fn scenario_text(kind: Kind, seed: u64, s: &Scene) -> String {
+    let c = &s.config;
+    let mut t = format!(
+        "# Reflex campaign scene {} ({}, campaign seed {seed}); replays with `sim-host run`.\nname = \"reflex campaign {} scene {}\"\nduration_s = {}\nseed = {}\n\n[arm]\nstart_rad = [{:?}, {:?}]\n",
+        s.index,
+        kind.name(),
+        kind.name(),
+        s.index,
+        c.duration_s,
+        c.seed,
+        c.start_rad[0],
+        c.start_rad[1]
+    );
+    for o in &c.obstacles {
+        let _ = write!(
+            t,
+            "\n[[obstacle]]\nx_m = {:?}\ny_m = {:?}\nr_m = {:?}\n",
+            o.start.x_m, o.start.y_m, o.start.r_m
+        );
+        if let Motion::Circle {
+            cx_m,
+            cy_m,
+            period_s,
+        } = o.motion
+        {
+            let _ = write!(
+                t,
+                "motion = \"circle\"\ncx_m = {cx_m:?}\ncy_m = {cy_m:?}\nperiod_s = {period_s:?}\n"
+            );
+        }
+    }
+    let (x, y) = (c.wand.points[0].1, c.wand.points[0].2);
+    let _ = write!(t, "\n[wand]\npath = [[0.0, {x:?}, {y:?}]]\n");
+    for (b, period) in &c.boards {
+        let _ = write!(
+            t,
+            "\n[[boards]]\nname = \"{}\"\nrate_hz = {:?}\n",
+            b.name(),
+            1.0 / period
+        );
+    }
+    t
+}
+
+/// Runs a campaign and writes `summary.json`, `scenes.csv` and a scenario file per scene
+/// with a collision into `out`.
+pub fn run_to_dir(
+    kind: Kind,
+    seed: u64,
+    n: u64,
+    threads: usize,
+    out: &Path,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Summary, String> {
+    let io = |e: std::io::Error| format!("{}: {e}", out.display());
+    std::fs::create_dir_all(out).map_err(io)?;
+    let (summary, results) = campaign(kind, seed, n, threads, progress);
+    let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
+    std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;
+    let mut csv = String::from(
+        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms\n",
+    );
+    for r in &results {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{},{}",
+            r.index,
+            r.collisions,
+            r.min_clearance_m,
+            r.goal_time_s.map_or(String::new(), |t| t.to_string()),
+            r.final_error_m,
+            r.stalled as u8,
+            r.escape_ms,
+            r.hold_ms
+        );
+    }
+    std::fs::write(out.join("scenes.csv"), csv).map_err(io)?;
+    for &i in &summary.collision_scenes {
+        let s = scene(kind, seed, i);
+        std::fs::write(
+            out.join(format!("collision-{i}.toml")),
+            scenario_text(kind, seed, &s),
+        )
+        .map_err(io)?;
+    }
+    Ok(summary)
+}

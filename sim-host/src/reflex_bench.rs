@@ -1,0 +1,368 @@
+//! `sim-host bench reflex` (issue 8): what the reflex costs.
+//!
+//! * The real reflex image on the emulated 68020 at 16.7 MHz, its whole main loop (records
+//!   read, health checked, window tested, subgoal published) against global RAM the host
+//!   keeps fresh (servo state, C-space heartbeat, object frames), in the cases of thesis
+//!   ch. V section 7: at rest; after 42 ms of full acceleration of both links (fig. V.5,
+//!   11.5 and 40.3 rad/s: the thesis's 214 pixels in 4.4 ms); at the thesis's expected top
+//!   speeds (29 and 55 rad/s, arrest region 32 x 32 pixels: the 146 kHz it needed); and
+//!   among obstacles. Free space is the worst case (thesis: the window is largest there).
+//! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
+//!   (native mode): the reflex must not slow the arm.
+
+use crate::boot::System;
+use crate::sim::{Config, Sim};
+use std::fmt::Write as _;
+use std::path::Path;
+use vme_map::records::{beacon_flags, Beacon, ObjectTable, ServoState};
+use vme_map::{BoardId, BoardSlot, GlobalBus};
+
+/// One image case.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageCase {
+    /// What it shows.
+    pub name: &'static str,
+    /// Main-loop passes measured.
+    pub passes: u64,
+    /// Mean cycles per pass.
+    pub cycles_per_pass: f64,
+    /// Mean pixel words tested per pass.
+    pub tests_per_pass: f64,
+}
+
+impl ImageCase {
+    /// Subgoals per second at 16.7 MHz.
+    pub fn rate_hz(&self) -> f64 {
+        crate::emu::CPU_HZ as f64 / self.cycles_per_pass
+    }
+    /// Pixel tests per second at 16.7 MHz (the thesis's 48,000).
+    pub fn pixels_per_s(&self) -> f64 {
+        self.tests_per_pass * self.rate_hz()
+    }
+}
+
+/// The servo state of an arm at `theta` turning at `omega` (rad, rad/s), its arrest point
+/// from the reflex's own braking model.
+fn servo_state(theta: [f64; 2], omega: [f64; 2], t_us: u32, loops: u32) -> ServoState {
+    let acc = [
+        arm::LINK1.max_accel_rad_s2() * 0.96 / 1.25,
+        arm::LINK2.max_accel_rad_s2() * 0.96 / 1.25,
+    ];
+    let a = |i: usize| theta[i] + omega[i] * omega[i].abs() / (2.0 * acc[i]);
+    let u = |x: f64| (x * 1e6).round() as i32;
+    ServoState {
+        theta1_urad: u(theta[0]),
+        theta2_urad: u(theta[1]),
+        omega1_urad_s: u(omega[0]),
+        omega2_urad_s: u(omega[1]),
+        arrest1_urad: u(a(0)),
+        arrest2_urad: u(a(1)),
+        t_us,
+        loops,
+        ..Default::default()
+    }
+}
+
+/// What the host keeps writing for the reflex image while a case runs: the servo state of
+/// an arm held at `theta` turning at `omega`, the object table with a new frame, the
+/// C-space board's heartbeat.
+pub struct Feed {
+    theta: [f64; 2],
+    omega: [f64; 2],
+    table: ObjectTable,
+    k: u32,
+}
+
+impl Feed {
+    /// The free-space case at rest, with the wand far from the arm (what `sim-host profile
+    /// reflex` runs).
+    pub fn at_rest() -> Self {
+        let mut table = ObjectTable::default();
+        table.beacons[vme_map::records::beacon_index::WAND] = Beacon {
+            x_um: -300_000,
+            y_um: 200_000,
+            t_us: 0,
+            flags: beacon_flags::VALID,
+        };
+        Feed {
+            theta: [0.3, 0.4],
+            omega: [0.0; 2],
+            table,
+            k: 0,
+        }
+    }
+
+    /// One 0.25 ms update.
+    pub fn apply(&mut self, g: &mut dyn GlobalBus) {
+        let k = self.k;
+        self.k += 1;
+        let s = servo_state(self.theta, self.omega, k * 250, 1 + k);
+        vme_map::SERVO_STATE.publish(g, &s);
+        self.table.frame = k;
+        vme_map::OBJECTS.publish(g, &self.table);
+        g.write_u32(BoardSlot::of(BoardId::Cspace0).heartbeat(), 1 + k);
+    }
+}
+
+/// Runs the reflex image for `ms` with the arm at `theta` turning at `omega` (held there:
+/// each pass sees the same state, as the case is defined), obstacle disks `disks` (x, y, r
+/// in mm) drawn in the map and the wand at `wand` (mm).
+fn image_case(
+    dir: &Path,
+    name: &'static str,
+    theta: [f64; 2],
+    omega: [f64; 2],
+    disks: &[(i32, i32, i32)],
+    wand: (i32, i32),
+    ms: f64,
+) -> Result<ImageCase, String> {
+    let mut sys = System::power_up(dir, &[BoardId::Reflex]).map_err(|e| e.to_string())?;
+    let mut table = ObjectTable::default();
+    {
+        let mut g = sys.bus();
+        for (i, &(x, y, r)) in disks.iter().enumerate() {
+            let d = cspace::Disk {
+                x_um: x * 1000,
+                y_um: y * 1000,
+                r_um: r * 1000,
+            };
+            let im = cspace::images(&d).map_err(|e| format!("{e:?}"))?;
+            cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
+            let b = cspace::worklist::OBSTACLE_BEACONS[i] as usize;
+            table.beacons[b] = Beacon {
+                x_um: x * 1000,
+                y_um: y * 1000,
+                t_us: 0,
+                flags: beacon_flags::VALID,
+            };
+            // The entry as a C-space board leaves it after drawing the obstacle.
+            let base = vme_map::layout::work_entry(i as u32);
+            g.write_u32(base + 4, b as u32);
+            g.write_u32(base + 8, (x * 1000) as u32);
+            g.write_u32(base + 12, (y * 1000) as u32);
+            g.write_u32(base + 16, (r * 1000) as u32);
+            g.write_u32(base + 20, cspace::worklist::DRAWN | (1 << 8));
+            g.write_u32(
+                vme_map::layout::OBSTACLE_RADII + 4 * i as u32,
+                (r * 1000) as u32,
+            );
+        }
+        table.beacons[vme_map::records::beacon_index::WAND] = Beacon {
+            x_um: wand.0 * 1000,
+            y_um: wand.1 * 1000,
+            t_us: 0,
+            flags: beacon_flags::VALID,
+        };
+    }
+    let step_ms = 0.25;
+    let steps = (ms / step_ms) as u32;
+    let (mut passes, mut tests_sum, mut samples) = (0u64, 0f64, 0u64);
+    let mut h0 = None;
+    let mut feed = Feed {
+        theta,
+        omega,
+        table,
+        k: 0,
+    };
+    for k in 0..steps {
+        feed.apply(&mut sys.bus());
+        sys.run_ms(step_ms);
+        // Measure after the reflex has had half a second to get going.
+        if k as f64 * step_ms >= 500.0 {
+            let hb = sys.heartbeat(BoardId::Reflex);
+            let h = *h0.get_or_insert((hb, sys.now));
+            passes = hb.wrapping_sub(h.0) as u64;
+            if let Ok((st, _)) = vme_map::REFLEX_STATUS.read(&mut sys.bus()) {
+                tests_sum += st.tests as f64;
+                samples += 1;
+            }
+            let _ = h;
+        }
+    }
+    let (_, c0) = h0.ok_or("the case is shorter than its warm-up")?;
+    let st = sys.status(BoardId::Reflex);
+    if st.state() != Some(vme_map::BoardState::Running) {
+        return Err(format!(
+            "{name}: the reflex image is {:?} ({:?}, record {:x?}), not running",
+            st.state(),
+            st.fault(),
+            sys.fault(BoardId::Reflex)
+        ));
+    }
+    let flags = vme_map::REFLEX_SUBGOAL
+        .read(&mut sys.bus())
+        .map(|r| r.0.flags)
+        .unwrap_or(0);
+    if flags & (vme_map::records::reflex_flags::HOLD | vme_map::records::reflex_flags::WAITING) != 0
+    {
+        return Err(format!("{name}: the reflex holds (flags {flags:#x})"));
+    }
+    Ok(ImageCase {
+        name,
+        passes,
+        cycles_per_pass: (sys.now - c0) as f64 / passes.max(1) as f64,
+        tests_per_pass: tests_sum / samples.max(1) as f64,
+    })
+}
+
+/// The image cases (module docs).
+pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
+    let clutter = [
+        (300, 300, 30),
+        (-200, 350, 25),
+        (150, -380, 35),
+        (-350, -150, 25),
+    ];
+    Ok(vec![
+        image_case(
+            dir,
+            "at rest, free space",
+            [0.3, 0.4],
+            [0.0, 0.0],
+            &[],
+            (-300, 200),
+            900.0,
+        )?,
+        image_case(
+            dir,
+            "fig. V.5: 42 ms of full acceleration (11.5, 40.3 rad/s)",
+            [0.3, 0.4],
+            [11.5, 40.3],
+            &[],
+            (-300, 200),
+            900.0,
+        )?,
+        image_case(
+            dir,
+            "top speed (29, 55 rad/s): arrest region 32 x 32 pixels",
+            [0.3, 0.4],
+            [29.0, 55.0],
+            &[],
+            (-300, 200),
+            900.0,
+        )?,
+        image_case(
+            dir,
+            "among 4 obstacles, moving (5, 10 rad/s)",
+            [2.0, -0.5],
+            [5.0, 10.0],
+            &clutter,
+            (-300, 200),
+            900.0,
+        )?,
+    ])
+}
+
+/// Time for both links to come within 2 encoder counts of `goal` and stay (from `t0`).
+fn settle_time(trace: &[(f64, [f64; 2])], goal: [f64; 2], t0: f64) -> Option<f64> {
+    let tol = [
+        2.0 * arm::LINK1.rad_per_count(),
+        2.0 * arm::LINK2.rad_per_count(),
+    ];
+    let within = |th: &[f64; 2]| (0..2).all(|i| (th[i] - goal[i]).abs() <= tol[i]);
+    let mut t_in = None;
+    for (t, th) in trace {
+        if within(th) {
+            t_in.get_or_insert(*t);
+        } else {
+            t_in = None;
+        }
+    }
+    t_in.map(|t| t - t0)
+}
+
+/// The free-move comparison, the thesis's step (link 1 by 3 rad, fig. III.3): the host
+/// gives the goal (3, 0) rad as the planner would (so the goal is exact, not the wand's
+/// noisy one), with the sensing, C-space, servo and reflex boards running; then the same
+/// goal straight to the servo alone, from the moment the reflex first released the arm.
+/// Returns (time with the reflex, time with the servo alone) to within 2 encoder counts of
+/// the goal on both links, staying there.
+pub fn free_move() -> Result<(f64, f64), String> {
+    let goal = [3.0, 0.0];
+    let base = Config {
+        duration_s: 1.2,
+        ..Config::default()
+    };
+    let mut cfg = base.clone();
+    cfg.boards.retain(|(b, _)| *b != BoardId::Planner);
+    let mut sim = Sim::new(cfg);
+    let mut trace = Vec::new();
+    let mut t0 = None;
+    let per_ms = (1e-3 / sim.cfg.dt_s).round() as u64;
+    let mut cycle = 0u32;
+    while !sim.done() {
+        if sim.steps.is_multiple_of(per_ms) {
+            cycle += 1;
+            let rec = vme_map::records::PlannerGoal {
+                goal1_urad: (goal[0] * 1e6) as i32,
+                goal2_urad: (goal[1] * 1e6) as i32,
+                cycle,
+                ..Default::default()
+            };
+            vme_map::PLANNER_GOAL.publish(&mut sim.bus(), &rec);
+        }
+        sim.step();
+        let flags = vme_map::REFLEX_SUBGOAL
+            .read(&mut sim.bus())
+            .map(|r| r.0.flags)
+            .unwrap_or(vme_map::records::reflex_flags::WAITING);
+        if t0.is_none() && flags & vme_map::records::reflex_flags::WAITING == 0 {
+            t0 = Some(sim.t_s());
+        }
+        trace.push((sim.t_s(), sim.plant.angles_rad()));
+    }
+    let t0 = t0.ok_or("the reflex never started")?;
+    let with = settle_time(&trace, goal, t0).ok_or("with the reflex the arm did not settle")?;
+    let mut cfg = base;
+    cfg.boards.retain(|(b, _)| *b == BoardId::Servo);
+    let mut sim = Sim::new(cfg);
+    let mut cycle = 0;
+    crate::sensing_cal::hold_at(&mut sim, [0.0, 0.0], t0, &mut cycle);
+    let mut trace = Vec::new();
+    while !sim.done() {
+        let dt = sim.cfg.dt_s;
+        crate::sensing_cal::hold_at(&mut sim, goal, dt, &mut cycle);
+        trace.push((sim.t_s(), sim.plant.angles_rad()));
+    }
+    let alone = settle_time(&trace, goal, t0).ok_or("the servo alone did not settle")?;
+    Ok((with, alone))
+}
+
+/// The bench's report.
+pub fn report(dir: &Path) -> Result<String, String> {
+    let mut r = String::new();
+    let _ = writeln!(
+        r,
+        "bench reflex: the reflex image on the emulated 68020 at 16.7 MHz (whole main loop)"
+    );
+    let _ = writeln!(
+        r,
+        "{:<58} {:>8} {:>10} {:>9} {:>10} {:>13}",
+        "case", "passes", "cycles", "tests", "rate Hz", "pixels/s"
+    );
+    for c in image_cases(dir)? {
+        let _ = writeln!(
+            r,
+            "{:<58} {:>8} {:>10.0} {:>9.1} {:>10.0} {:>13.0}",
+            c.name,
+            c.passes,
+            c.cycles_per_pass,
+            c.tests_per_pass,
+            c.rate_hz(),
+            c.pixels_per_s()
+        );
+    }
+    let _ = writeln!(
+        r,
+        "thesis: 214 pixels in 4.4 ms (48,000 pixels/s, subgoals at 200-600 Hz); 146,000 pixels/s needed for full speed; targets: >= 300,000 pixels/s, >= 1 kHz"
+    );
+    let (with, alone) = free_move()?;
+    let _ = writeln!(
+        r,
+        "free 3 rad move of link 1 (native; to within 2 counts on both links): servo alone {:.4} s, with the reflex {:.4} s: {:+.1}% (target <= +5%)",
+        alone,
+        with,
+        100.0 * (with / alone - 1.0)
+    );
+    Ok(r)
+}
