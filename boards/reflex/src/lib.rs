@@ -49,6 +49,10 @@ pub struct Board {
     objects_ok: bool,
     /// The planner goal's words.
     planner_w: [u32; PLANNER_WORDS],
+    /// The reflex's inputs, updated in place each pass.
+    input: Input,
+    /// The work-list entry read last.
+    entry: u32,
 }
 
 impl Default for Board {
@@ -62,31 +66,14 @@ pub struct BusMap<'a, G: GlobalBus>(pub &'a mut G);
 
 impl<G: GlobalBus> Map for BusMap<'_, G> {
     fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
-        let mut a = cspace_counter(i1, i2, 0);
-        let mut acc = 0;
-        for _ in 0..n {
-            acc |= self.0.read_u32(a);
-            a += 4;
-        }
-        acc
+        self.0.or_words(cspace_counter(i1, i2, 0), n, 4)
     }
     fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
-        let mut a = cspace_counter(i1, i2, 0);
-        let mut acc = 0;
-        for _ in 0..n {
-            acc |= self.0.read_u32(a);
-            a += 4 * CSPACE_SIDE;
-        }
-        acc
+        self.0
+            .or_words(cspace_counter(i1, i2, 0), n, 4 * CSPACE_SIDE)
     }
     fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
-        let mut a = CSPACE_STRIPES + 4 * i1;
-        let mut acc = 0;
-        for _ in 0..n {
-            acc |= self.0.read_u32(a);
-            a += 4;
-        }
-        acc
+        self.0.or_words(CSPACE_STRIPES + 4 * i1, n, 4)
     }
 }
 
@@ -107,6 +94,25 @@ impl Board {
             objects_w: [0; OBJECT_WORDS],
             objects_ok: false,
             planner_w: [0; PLANNER_WORDS],
+            input: Input {
+                servo: None,
+                goal: GoalInput::None,
+                health: HealthInput {
+                    cspace_heartbeats: [0; 3],
+                    objects_frame: 0,
+                    objects_torn: true,
+                    entries: [EntryView {
+                        claim: 0,
+                        state: 0,
+                        tracked: false,
+                        undrawn: false,
+                        lag_um: 0,
+                    }; ENTRIES],
+                    fresh: 0,
+                },
+                obstacles_moving: false,
+            },
+            entry: 0,
         }
     }
 
@@ -144,23 +150,19 @@ impl Board {
             // The planner published once and now reads torn: keep the last goal.
             Err(_) => GoalInput::None,
         };
-        let mut health = HealthInput {
-            cspace_heartbeats: [0; 3],
-            objects_frame: self.objects_w[0],
-            objects_torn: !ok,
-            entries: [EntryView::default(); ENTRIES],
-        };
-        fill_health(&mut health, g, &self.objects_w, ok);
-        let obstacles_moving = ok && moving(&self.objects_w);
-        let out = self.reflex.step(
-            &Input {
-                servo,
-                goal,
-                health,
-                obstacles_moving,
-            },
-            &mut BusMap(&mut *g),
-        );
+        // The inputs are built in place in the board (copying them into a fresh value each
+        // pass cost the 68020 thousands of cycles of memset and memcpy).
+        let inp = &mut self.input;
+        inp.servo = servo;
+        inp.goal = goal;
+        inp.health.objects_frame = self.objects_w[0];
+        inp.health.objects_torn = !ok;
+        // One work-list entry a pass, in turn (the health limits are 20-100 ms).
+        self.entry = (self.entry + 1) % ENTRIES as u32;
+        fill_health(&mut inp.health, g, &self.objects_w, ok, self.entry);
+        inp.health.fresh = 1 << self.entry;
+        inp.obstacles_moving = ok && moving(&self.objects_w);
+        let out = self.reflex.step(&self.input, &mut BusMap(&mut *g));
         if let Some(sub) = out.subgoal_urad {
             self.cycle = self.cycle.wrapping_add(1);
             let span = |s: (i32, i32)| {
@@ -256,8 +258,8 @@ fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
     any != 0
 }
 
-/// The C-space heartbeats and the work list into `h`, each entry against its obstacle's
-/// sensed position in `objects`. Filled through a reference in a non-inlined function: a
+/// The C-space heartbeats and work-list entry `i` into `h`, the entry against its obstacle's
+/// sensed position in `objects`. Written through a reference in a non-inlined function: a
 /// local array filled in a loop lost its index on the 68k (docs/toolchain.md, class 6).
 #[inline(never)]
 fn fill_health<G: GlobalBus>(
@@ -265,26 +267,24 @@ fn fill_health<G: GlobalBus>(
     g: &mut G,
     objects: &[u32; OBJECT_WORDS],
     ok: bool,
+    i: u32,
 ) {
     h.cspace_heartbeats[0] = g.read_u32(BoardSlot::of(BoardId::Cspace0).heartbeat());
     h.cspace_heartbeats[1] = g.read_u32(BoardSlot::of(BoardId::Cspace1).heartbeat());
     h.cspace_heartbeats[2] = g.read_u32(BoardSlot::of(BoardId::Cspace2).heartbeat());
-    let mut i = 0;
-    while i < ENTRIES {
-        h.entries[i] = entry_view(g, i as u32, objects, ok);
-        i += 1;
-    }
+    entry_view(&mut h.entries[i as usize], g, i, objects, ok);
 }
 
 /// Work-list entry `i` as the reflex's health monitor sees it: the words it needs, read
 /// one by one (claim, x, y, state of `WorkEntry`).
 #[inline(never)]
 fn entry_view<G: GlobalBus>(
+    v: &mut EntryView,
     g: &mut G,
     i: u32,
     objects: &[u32; OBJECT_WORDS],
     ok: bool,
-) -> EntryView {
+) {
     let base = vme_map::layout::work_entry(i);
     let claim = g.read_u32(base);
     let (ex, ey) = (g.read_u32(base + 8) as i32, g.read_u32(base + 12) as i32);
@@ -301,13 +301,11 @@ fn entry_view<G: GlobalBus>(
         beacon_word(objects, b, 1) as i32,
     );
     let lag = (bx - ex).abs().max((by - ey).abs());
-    EntryView {
-        claim,
-        state,
-        tracked: valid && drawn,
-        undrawn: (valid || exists) && !drawn,
-        lag_um: lag,
-    }
+    v.claim = claim;
+    v.state = state;
+    v.tracked = valid && drawn;
+    v.undrawn = (valid || exists) && !drawn;
+    v.lag_um = lag;
 }
 
 /// The board's safe state: no outputs but global RAM. Also the image's safe-stop hook after a fault.

@@ -52,6 +52,8 @@ pub struct HealthInput {
     pub objects_torn: bool,
     /// The work list.
     pub entries: [EntryView; ENTRIES],
+    /// Bit `i` set: entry `i` was read this pass (the others are as last read).
+    pub fresh: u32,
 }
 
 /// What is wrong with the inputs.
@@ -86,6 +88,8 @@ pub struct Monitor {
     frame_seen: i32,
     /// Some entry lags or is undrawn right now (not yet for long): -1.
     behind_now: i32,
+    /// Per entry, at its last reading: torn, lagging, behind now (masks).
+    verdict: [[i32; 3]; ENTRIES],
 }
 
 impl Monitor {
@@ -117,6 +121,7 @@ impl Monitor {
             hb_seen: 0,
             frame_seen: 0,
             behind_now: 0,
+            verdict: [[0; 3]; ENTRIES],
         }
     }
 
@@ -151,20 +156,22 @@ impl Monitor {
         self.frame_had |= ok;
         self.frame = pick(ok, h.objects_frame as i32, self.frame as i32) as u32;
         self.frame_since_us = since(new, self.frame_since_us);
-        let mut torn = 0;
-        let mut lag = 0;
-        let mut behind_now = 0;
-        for (i, e) in h.entries.iter().enumerate() {
-            let old = self.entries[i];
-            let free = nonzero(e.claim) ^ -1;
-            let changed = nonzero((e.claim ^ old.claim) | (e.state ^ old.state));
-            self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
-            let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
-            self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
-            behind_now |= behind;
-            torn |= older(self.claimed_since_us[i], MAP_TORN_US);
-            lag |= older(self.lag_since_us[i], LAG_US);
-            self.entries[i] = *e;
+        // Only the entries read this pass are looked at again; the others keep the verdict
+        // of their last reading (a few passes old: the limits are 20-100 ms).
+        let mut i = 0;
+        while i < ENTRIES {
+            if (h.fresh >> i) & 1 != 0 {
+                self.entry(i, &h.entries[i], now_us);
+            }
+            i += 1;
+        }
+        let (mut torn, mut lag, mut behind_now) = (0, 0, 0);
+        let mut i = 0;
+        while i < ENTRIES {
+            torn |= self.verdict[i][0];
+            lag |= self.verdict[i][1];
+            behind_now |= self.verdict[i][2];
+            i += 1;
         }
         self.behind_now = behind_now;
         let stale = !self.hb_seen | older(self.hb_since_us, MAP_STALE_US);
@@ -181,6 +188,31 @@ impl Monitor {
             4 => Some(Problem::ObjectsStale),
             _ => None,
         }
+    }
+}
+
+impl Monitor {
+    /// Takes entry `i`'s new reading `e` at `now_us`: its timers and verdict (torn, lagging,
+    /// behind now: masks).
+    #[inline(never)]
+    fn entry(&mut self, i: usize, e: &EntryView, now_us: u32) {
+        let now = now_us as i32;
+        let since = |m: i32, since: u32| pick(m, now, since as i32) as u32;
+        let older = |since: u32, limit: u32| {
+            lt(limit as i32, now_us.wrapping_sub(since).min(1 << 30) as i32)
+        };
+        let old = self.entries[i];
+        let free = nonzero(e.claim) ^ -1;
+        let changed = nonzero((e.claim ^ old.claim) | (e.state ^ old.state));
+        self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
+        let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
+        self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
+        self.verdict[i] = [
+            older(self.claimed_since_us[i], MAP_TORN_US),
+            older(self.lag_since_us[i], LAG_US),
+            behind,
+        ];
+        self.entries[i] = *e;
     }
 }
 

@@ -56,16 +56,21 @@ pub const SIDE: u32 = 128;
 /// Angle units per map pixel.
 pub const PIX_U: i32 = 256;
 
-/// Micro-radians to angle units, Q32 (32768 / (2 pi 10^6)).
-const URAD_TO_U_Q32: i32 = 22_399_067;
 /// Angle units to micro-radians, Q16.
 const U_TO_URAD_Q16: i32 = 12_566_371;
 /// 2^32 / 10^6, rounded up: times microseconds, Q32 seconds (never short).
 const US_TO_S_Q32: i32 = 4295;
 
-/// Micro-radians to angle units (rounded).
+/// 32768 / (2 pi 10^6) in Q24.
+const URAD_TO_U_Q24: i32 = 87_496;
+
+/// Micro-radians to angle units (floored, within one unit over +-4 turns): two 32-bit
+/// products of the angle's halves, no 64-bit multiply (this runs a dozen times a pass).
+#[inline(never)]
 pub fn urad_to_u(a_urad: i32) -> i32 {
-    fx::mul_shr(a_urad, URAD_TO_U_Q32, 32)
+    let hi = (a_urad >> 12) * URAD_TO_U_Q24;
+    let lo = ((a_urad & 0xFFF) * URAD_TO_U_Q24) >> 12;
+    (hi + lo) >> 12
 }
 
 /// Angle units to micro-radians (rounded).

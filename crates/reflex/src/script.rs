@@ -52,6 +52,7 @@ pub fn scripted_pass<M: Map + ?Sized>(
         objects_frame: w[16],
         objects_torn: w[17] & 1 != 0,
         entries: [EntryView::default(); ENTRIES],
+        fresh: (1 << ENTRIES) - 1,
     };
     entries(&mut health, w);
     let o = r.step(

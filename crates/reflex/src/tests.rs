@@ -52,6 +52,7 @@ fn healthy(k: u32) -> HealthInput {
         objects_frame: k,
         objects_torn: false,
         entries: [EntryView::default(); health::ENTRIES],
+        fresh: (1 << health::ENTRIES) - 1,
     }
 }
 
@@ -454,5 +455,14 @@ proptest! {
                 prop_assert!(!m.occupied(a.theta[0], a.theta[1]), "pass {k}: arm at {:?} entered an obstacle", a.theta);
             }
         }
+    }
+}
+
+proptest! {
+    #[test]
+    fn angle_units_are_within_one_of_exact(a in -25_000_000i32..25_000_000) {
+        let exact = a as f64 * 32768.0 / (2.0 * std::f64::consts::PI * 1e6);
+        let u = urad_to_u(a) as f64;
+        prop_assert!((u - exact.floor()).abs() <= 1.0, "{a}: {u} vs {exact}");
     }
 }

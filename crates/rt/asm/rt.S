@@ -177,6 +177,46 @@ __vme_cas32:                    /* u32 __vme_cas32(u32 *addr, u32 current, u32 n
     cas.l   %d0, %d1, (%a0)     /* equal: store new; else d0 = value found */
     rts
 
+/* ---- or of words: a row or column of the C-space map (vme-map's GlobalBus::or_words) ----
+ * u32 __vme_or_words(const u32 *addr, u32 n, u32 stride): the or of n words stride bytes
+ * apart. Rows (stride 4) take OR.L (An)+ with DBRA, four words a pass; other strides
+ * ADDA.L. n = 0 gives 0. */
+    .section .text.__vme_or_words, "ax"
+    .globl __vme_or_words
+__vme_or_words:
+    movea.l 4(%sp), %a0
+    move.l  8(%sp), %d1
+    moveq   #0, %d0
+    tst.l   %d1
+    beq.s   9f
+    cmpi.l  #4, 12(%sp)
+    bne.s   5f
+    /* stride 4: n / 4 passes of four words, then n % 4 words */
+    move.l  %d1, -(%sp)
+    lsr.l   #2, %d1
+    beq.s   2f
+    subq.l  #1, %d1
+1:  or.l    (%a0)+, %d0
+    or.l    (%a0)+, %d0
+    or.l    (%a0)+, %d0
+    or.l    (%a0)+, %d0
+    dbra    %d1, 1b
+2:  move.l  (%sp)+, %d1
+    andi.l  #3, %d1
+    beq.s   9f
+    subq.l  #1, %d1
+3:  or.l    (%a0)+, %d0
+    dbra    %d1, 3b
+    rts
+5:  move.l  %d2, -(%sp)
+    move.l  16(%sp), %d2        /* stride (one word pushed) */
+    subq.l  #1, %d1
+6:  or.l    (%a0), %d0
+    adda.l  %d2, %a0
+    dbra    %d1, 6b
+    move.l  (%sp)+, %d2
+9:  rts
+
 /* ---- fixed-point multiply: the servo's only wide arithmetic (crates/servo::fx) ----
  * i32 __fx_mul_shr(i32 a, i32 b, u32 sh), 1 <= sh <= 32:
  *   round((a * b) >> sh), saturated to i32: the 64-bit product of MULS.L, plus 1 << (sh-1),

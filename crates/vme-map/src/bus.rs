@@ -21,6 +21,20 @@ pub trait GlobalBus {
     /// `CAS.L`, an indivisible read-modify-write cycle on the VME bus). Returns the value
     /// found, so the swap happened exactly when the result equals `current`.
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32;
+    /// The bitwise or of `n` aligned words from `off`, `stride` bytes apart: a row or a
+    /// column of the C-space map tested for obstacles in one call (the reflex's inner loop;
+    /// on the 68020 a two-instruction loop in the runtime's assembly).
+    fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        let mut acc = 0;
+        let mut a = off;
+        let mut i = 0;
+        while i < n {
+            acc |= self.read_u32(a);
+            a += stride;
+            i += 1;
+        }
+        acc
+    }
 }
 
 /// A borrowed bus is a bus: lets code generic over a sized `G: GlobalBus` (inlined accesses
@@ -40,6 +54,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
         (**self).cas_u32(off, current, new)
+    }
+    fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        (**self).or_words(off, n, stride)
     }
 }
 
@@ -144,5 +161,14 @@ impl GlobalBus for MmioGlobal {
         }
         // SAFETY: an aligned, mapped global RAM word; CAS.L touches only that word.
         unsafe { __vme_cas32(Self::ptr::<u32>(off), current, new) }
+    }
+    #[inline(always)]
+    fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        extern "C" {
+            // `OR.L (An)+` / `ADDA` loops in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_or_words(addr: *const u32, n: u32, stride: u32) -> u32;
+        }
+        // SAFETY: `n` aligned words of mapped global RAM, only read.
+        unsafe { __vme_or_words(Self::ptr::<u32>(off), n, stride) }
     }
 }
