@@ -274,3 +274,81 @@ fn no_collision_in_2000_random_static_scenes() {
     assert!(s.goals_reached > 800, "{s:?}");
     assert!(s.stalled > 0, "{s:?}");
 }
+
+/// Runs a shipped scenario; returns the flags the reflex published at each millisecond, the
+/// final angles, the goal pose the reflex used and the collision count.
+fn run_figure(file: &str) -> (Vec<u32>, [f64; 2], [f64; 2], u64) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sim-host/scenarios")
+        .join(file);
+    let sc = sim_host::scenario::Scenario::load(&path).unwrap();
+    let mut sim = sim_host::sim::Sim::new(sc.config);
+    let mut flags = Vec::new();
+    while !sim.done() {
+        sim.step();
+        if sim.steps.is_multiple_of(20) {
+            flags.push(
+                vme_map::REFLEX_SUBGOAL
+                    .read(&mut sim.bus())
+                    .map_or(0, |r| r.0.flags),
+            );
+        }
+    }
+    let st = vme_map::REFLEX_STATUS.read(&mut sim.bus()).unwrap().0;
+    let goal = [st.goal1_urad as f64 * 1e-6, st.goal2_urad as f64 * 1e-6];
+    (flags, sim.plant.angles_rad(), goal, sim.collisions.events)
+}
+
+/// Figs. V.6-V.10 as scenarios: each shows the behaviour the thesis's figure shows.
+#[test]
+fn the_figures_of_chapter_v_behave_as_in_the_thesis() {
+    use vme_map::records::reflex_flags as rf;
+    let px = std::f64::consts::TAU / 128.0;
+    let near = |a: [f64; 2], b: [f64; 2], i: usize| (a[i] - b[i]).abs() < 0.01;
+    // V.6 and V.7: the goal reached; V.6's goal is inside the first window.
+    for f in ["fig_v_6.toml", "fig_v_7.toml"] {
+        let (flags, end, goal, hits) = run_figure(f);
+        assert_eq!(hits, 0, "{f}");
+        assert!(
+            near(end, goal, 0) && near(end, goal, 1),
+            "{f}: {end:?} vs {goal:?}"
+        );
+        // The first pass with the wand's goal.
+        let first = flags.iter().position(|&x| x & rf::FROM_WAND != 0).unwrap();
+        let at_goal_first = flags[first] & rf::AT_GOAL != 0;
+        assert_eq!(
+            at_goal_first,
+            f == "fig_v_6.toml",
+            "{f}: first subgoal flags {:#x}",
+            flags[first]
+        );
+    }
+    // V.8: theta1 stopped at the wall, theta2 at its goal.
+    let (flags, end, goal, hits) = run_figure("fig_v_8.toml");
+    assert_eq!(hits, 0);
+    let last = *flags.last().unwrap();
+    assert_ne!(last & rf::BLOCKED1, 0, "{last:#x}");
+    assert!(near(end, goal, 1), "theta2 {end:?} vs {goal:?}");
+    assert!(
+        (end[0] - goal[0]).abs() > 5.0 * px,
+        "theta1 {end:?} vs {goal:?}"
+    );
+    // V.9: both axes stopped, the stall flagged.
+    let (flags, end, goal, hits) = run_figure("fig_v_9.toml");
+    assert_eq!(hits, 0);
+    let last = *flags.last().unwrap();
+    assert_eq!(
+        last & (rf::BLOCKED1 | rf::BLOCKED2 | rf::STALLED),
+        rf::BLOCKED1 | rf::BLOCKED2 | rf::STALLED,
+        "{last:#x}"
+    );
+    assert!(!near(end, goal, 0) && !near(end, goal, 1));
+    // V.10: out of the marked region first, then to the goal, never touching the obstacle.
+    let (flags, end, goal, hits) = run_figure("fig_v_10.toml");
+    assert_eq!(hits, 0);
+    assert!(flags.iter().any(|&x| x & rf::ESCAPING != 0));
+    assert!(
+        near(end, goal, 0) && near(end, goal, 1),
+        "{end:?} vs {goal:?}"
+    );
+}

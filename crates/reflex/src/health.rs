@@ -90,6 +90,8 @@ pub struct Monitor {
     behind_now: i32,
     /// Per entry, at its last reading: torn, lagging, behind now (masks).
     verdict: [[i32; 3]; ENTRIES],
+    /// Bit `i`: entry `i` has been read at least once.
+    seen: u32,
 }
 
 impl Monitor {
@@ -97,7 +99,8 @@ impl Monitor {
     /// position or was missing (even if not yet for long enough to be a problem): before
     /// the inputs were first good, the arm waits for this to clear too.
     pub fn behind(&self) -> bool {
-        self.behind_now != 0
+        // Entries not read yet count as behind: the board reads one a pass.
+        self.behind_now != 0 || self.seen != (1 << ENTRIES) - 1
     }
 
     /// A monitor that has seen nothing.
@@ -122,6 +125,7 @@ impl Monitor {
             frame_seen: 0,
             behind_now: 0,
             verdict: [[0; 3]; ENTRIES],
+            seen: 0,
         }
     }
 
@@ -158,6 +162,7 @@ impl Monitor {
         self.frame_since_us = since(new, self.frame_since_us);
         // Only the entries read this pass are looked at again; the others keep the verdict
         // of their last reading (a few passes old: the limits are 20-100 ms).
+        self.seen |= h.fresh & ((1 << ENTRIES) - 1);
         let mut i = 0;
         while i < ENTRIES {
             if (h.fresh >> i) & 1 != 0 {
