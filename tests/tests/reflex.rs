@@ -352,3 +352,45 @@ fn the_figures_of_chapter_v_behave_as_in_the_thesis() {
         "{end:?} vs {goal:?}"
     );
 }
+
+/// The servo board rides out a subgoal record caught mid-publish for a few passes (the
+/// emulator can stop a writer mid-publish for a whole time slice), and records one left torn
+/// (a reflex that died mid-write) as a fault and holds.
+#[test]
+fn the_servo_rides_out_a_torn_subgoal_briefly_and_faults_on_one_left_torn() {
+    use sim_host::sim::{Config, Sim};
+    use vme_map::records::ReflexSubgoal;
+    let cfg = Config {
+        duration_s: 1.0,
+        boards: vec![(BoardId::Servo, 1.0 / 3000.0)],
+        ..Config::default()
+    };
+    let mut sim = Sim::new(cfg);
+    let mut cycle = 0;
+    sim_host::sensing_cal::hold_at(&mut sim, [0.2, 0.1], 0.1, &mut cycle);
+    let status = |sim: &mut Sim| vme_map::BoardSlot::of(BoardId::Servo).status_word(&mut sim.bus());
+    let rec = ReflexSubgoal {
+        goal1_urad: 200_000,
+        goal2_urad: 100_000,
+        flags: 0,
+        cycle: cycle + 1,
+    };
+    // Torn for 1 ms (three servo passes): no fault.
+    vme_map::REFLEX_SUBGOAL.publish_torn(&mut sim.bus(), &rec);
+    for _ in 0..20 {
+        sim.step();
+    }
+    vme_map::REFLEX_SUBGOAL.publish(&mut sim.bus(), &rec);
+    for _ in 0..20 {
+        sim.step();
+    }
+    assert_eq!(status(&mut sim).fault(), Some(vme_map::FaultCode::None));
+    // Left torn: a fault within TORN_PASSES passes.
+    vme_map::REFLEX_SUBGOAL.publish_torn(&mut sim.bus(), &rec);
+    for _ in 0..(20 * board_servo::TORN_PASSES as usize) {
+        sim.step();
+    }
+    let st = status(&mut sim);
+    assert_eq!(st.fault(), Some(vme_map::FaultCode::TornRecord));
+    assert_eq!(st.state(), Some(vme_map::BoardState::Degraded));
+}
