@@ -8,7 +8,8 @@
 //! shoulder, all the same way, each at its own speed up to [`MAX_BORDER_RAD_S`]: a disk's
 //! C-space image then slides rigidly along the diagonal (thesis ch. IV section 5, the polar
 //! shift), so its borders move at exactly that speed, the thesis's quasi-static bound of 30
-//! pixels per second (line ~1597). The arm starts at least 30 mm from every disk.
+//! pixels per second (line ~1597). The arm starts at least 30 mm from every disk, and stays
+//! so for the first half second if it did not move (the boards' start-up).
 //!
 //! Scenes are independent and seeded by the campaign seed and their index, so a campaign's
 //! results do not depend on how many threads run it; a scene with a collision is written
@@ -106,7 +107,15 @@ pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
         for _ in 0..200 {
             let s = [u(-PI, PI), u(-PI, PI)];
             let p = Pose::new(s[0], s[1]);
-            if obstacles.iter().all(|o| p.clearance_m(&o.start) >= clear_m) {
+            // Clear of every obstacle wherever it moves during the first half second: the
+            // boards need ~0.2 s from power-up to the first map (the sensing filters fill),
+            // and an arm that cannot move yet cannot get out of the way.
+            let clear = (0..=10).all(|k| {
+                obstacles
+                    .iter()
+                    .all(|o| p.clearance_m(&o.at(0.05 * k as f64)) >= clear_m)
+            });
+            if clear {
                 start = Some(s);
                 break;
             }

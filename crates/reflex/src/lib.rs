@@ -90,7 +90,9 @@ pub const DEPTH_PX: i32 = 8;
 /// Most pixel words read while growing the window per pass.
 pub const GROW_BUDGET: u32 = 1024;
 /// Escape search radius, pixels.
-pub const ESCAPE_PX: i32 = 12;
+pub const ESCAPE_PX: i32 = 20;
+/// Farthest an escape subgoal lies from the arm, each axis, angle units (1.5 pixels).
+pub const ESCAPE_STEP_U: i32 = 384;
 /// Free pixels around an escape target, each side (more among moving obstacles).
 pub const ESCAPE_CLEAR_PX: i32 = 1;
 /// Among moving obstacles: the time the arm needs to react to one (the map's refresh and
@@ -497,9 +499,20 @@ impl Reflex {
                 out.window = [(at[0], at[0]), (at[1], at[1])];
                 match self.escape(map, at, [a1.goal >> 8, a2.goal >> 8], clear_px, &mut tests) {
                     Some(q) => {
+                        // Toward the target a step at a time, so the arm leaves at a speed
+                        // the next passes can still correct (a full-speed dash to a target
+                        // chosen once ran into obstacles that had moved meanwhile).
                         out.flags |= flags::ESCAPING;
-                        sub[0] = u_to_urad(q[0] * PIX_U + PIX_U / 2);
-                        sub[1] = u_to_urad(q[1] * PIX_U + PIX_U / 2);
+                        let step = |th: i32, q: i32| {
+                            let d = masks::clamp(
+                                q * PIX_U + PIX_U / 2 - th,
+                                -ESCAPE_STEP_U,
+                                ESCAPE_STEP_U,
+                            );
+                            u_to_urad(th + d)
+                        };
+                        sub[0] = step(a1.theta, q[0]);
+                        sub[1] = step(a2.theta, q[1]);
                     }
                     None => {
                         out.flags |= flags::TRAPPED;
@@ -517,10 +530,11 @@ impl Reflex {
         out.subgoal_urad = Some(sub);
     }
 
-    /// Where to escape to from pixel `at`: the target of the previous pass while its block
-    /// of `clear` pixels each side stays free (a target that changed each pass made the arm
-    /// dither between two ways out), else the nearest free block, the one nearest `toward`
-    /// among equals, reached by a free rectangle unless the arm's own pixel is marked.
+    /// Where to escape to from pixel `at`: the target of the previous pass while it and the
+    /// way to it stay free (a target that changed each pass made the arm dither between two
+    /// ways out; one kept after obstacles closed the way led the arm into them), else the
+    /// nearest free block of `clear` pixels each side, the one nearest `toward` among
+    /// equals, reached by a free rectangle.
     #[inline(never)]
     fn escape<M: Map + ?Sized>(
         &mut self,
@@ -530,19 +544,6 @@ impl Reflex {
         clear: i32,
         tests: &mut u32,
     ) -> Option<[i32; 2]> {
-        if let Some(q) = self.escape_to {
-            let s1 = Span {
-                lo: q[0] - clear,
-                hi: q[0] + clear,
-            };
-            let s2 = Span {
-                lo: q[1] - clear,
-                hi: q[1] + clear,
-            };
-            if window::rect_free(map, s1, s2, tests) {
-                return Some(q);
-            }
-        }
         let here1 = Span {
             lo: at[0],
             hi: at[0],
@@ -552,6 +553,12 @@ impl Reflex {
             hi: at[1],
         };
         let inside = !window::rect_free(map, here1, here2, tests);
+        // The previous target while it and the way to it stay free.
+        if let Some(q) = self.escape_to {
+            if window::clear_at(map, at, q, ESCAPE_CLEAR_PX, true, inside, tests) {
+                return Some(q);
+            }
+        }
         // Back off along a free rectangle to a block with the full clearance, or the narrow
         // one if none is near. When the map marks the arm's own pixel (its conservative
         // margin, or an obstacle that came on), the rectangle starts at the arm's neighbour

@@ -157,16 +157,35 @@ fn walls_along_both_axes_stop_both() {
 
 #[test]
 fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
-    // Fig. V.10: the obstacle moved over the arm; it heads for the nearest free pixel.
+    // Fig. V.10: the obstacle moved over the arm; it heads for the nearest free pixel, a
+    // step of at most ESCAPE_STEP_U a pass, and gets out.
     let mut m = TestMap::new();
     let p = (1.0 / PIX).floor() as i32;
     m.block(p - 2, p + 6, p - 6, p + 6);
-    let o = at_rest(&m, [1.0, 1.0], [2.0, 1.0], 2);
-    assert_ne!(o.flags & flags::ESCAPING, 0);
-    let s = sub(&o);
-    assert!(!m.occupied(s[0], s[1]), "{s:?}");
-    // The nearest way out is through the near (-theta1) side: 3 pixels, not 6.
-    assert!(s[0] < 1.0, "{s:?}");
+    let mut r = Reflex::default();
+    let mut th = [1.0, 1.0];
+    let mut escaped = false;
+    for k in 1..=40 {
+        let inp = Input {
+            servo: Some(servo_at(th, [0.0; 2], k)),
+            goal: planner([2.0, 1.0], k),
+            health: healthy(k),
+            obstacles_moving: false,
+        };
+        let o = r.step(&inp, &mut m.map());
+        let s = sub(&o);
+        if o.flags & flags::ESCAPING != 0 {
+            escaped = true;
+            // The nearest way out is through the near (-theta1) side: 3 pixels, not 6.
+            assert!(s[0] <= th[0] + 1e-6, "pass {k}: {s:?} from {th:?}");
+            let step = ESCAPE_STEP_U as f64 * PIX / PIX_U as f64 + 1e-3;
+            assert!((s[0] - th[0]).abs() <= step && (s[1] - th[1]).abs() <= step);
+        }
+        // The arm goes where it is told (at rest at the subgoal by the next pass).
+        th = s;
+    }
+    assert!(escaped);
+    assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
 }
 
 #[test]

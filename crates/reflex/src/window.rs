@@ -254,7 +254,7 @@ fn ring(at: [i32; 2], r: i32, d: i32, side: u32) -> [i32; 2] {
 /// Whether the block of `clear` pixels around `q` is free, and with `direct` the rectangle
 /// from `at` (with `from_next`, from `at`'s neighbour toward `q`) to `q` too.
 #[inline(never)]
-fn clear_at<M: Map + ?Sized>(
+pub fn clear_at<M: Map + ?Sized>(
     m: &mut M,
     at: [i32; 2],
     q: [i32; 2],
