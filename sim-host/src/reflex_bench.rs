@@ -205,52 +205,45 @@ fn image_case(
     })
 }
 
+/// The obstacles (x, y, r in mm) of the cluttered case.
+const CLUTTER: [(i32, i32, i32); 4] = [
+    (300, 300, 30),
+    (-200, 350, 25),
+    (150, -380, 35),
+    (-350, -150, 25),
+];
+
 /// The image cases (module docs).
 pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
-    let clutter = [
-        (300, 300, 30),
-        (-200, 350, 25),
-        (150, -380, 35),
-        (-350, -150, 25),
-    ];
-    Ok(vec![
-        image_case(
-            dir,
-            "at rest, free space",
-            [0.3, 0.4],
-            [0.0, 0.0],
-            &[],
-            (-300, 200),
-            900.0,
-        )?,
-        image_case(
-            dir,
+    // (name, angles, speeds, obstacles)
+    type Case = (&'static str, [f64; 2], [f64; 2], &'static [(i32, i32, i32)]);
+    let cases: [Case; 4] = [
+        ("at rest, free space", [0.3, 0.4], [0.0, 0.0], &[]),
+        (
             "fig. V.5: 42 ms of full acceleration (11.5, 40.3 rad/s)",
             [0.3, 0.4],
             [11.5, 40.3],
             &[],
-            (-300, 200),
-            900.0,
-        )?,
-        image_case(
-            dir,
+        ),
+        (
             "top speed (29, 55 rad/s): arrest region 32 x 32 pixels",
             [0.3, 0.4],
             [29.0, 55.0],
             &[],
-            (-300, 200),
-            900.0,
-        )?,
-        image_case(
-            dir,
+        ),
+        (
             "among 4 obstacles, moving (5, 10 rad/s)",
             [2.0, -0.5],
             [5.0, 10.0],
-            &clutter,
-            (-300, 200),
-            900.0,
-        )?,
-    ])
+            &CLUTTER,
+        ),
+    ];
+    cases
+        .iter()
+        .map(|&(name, theta, omega, disks)| {
+            image_case(dir, name, theta, omega, disks, (-300, 200), 900.0)
+        })
+        .collect()
 }
 
 /// Time for both links to come within 2 encoder counts of `goal` and stay (from `t0`).

@@ -38,6 +38,17 @@ pub struct EntryView {
     pub lag_um: i32,
 }
 
+impl EntryView {
+    /// An entry never read: free, nothing drawn.
+    pub const EMPTY: EntryView = EntryView {
+        claim: 0,
+        state: 0,
+        tracked: false,
+        undrawn: false,
+        lag_um: 0,
+    };
+}
+
 /// Number of work-list entries watched (the obstacle beacons).
 pub const ENTRIES: usize = 6;
 
@@ -111,13 +122,7 @@ impl Monitor {
             frame: 0,
             frame_had: 0,
             frame_since_us: 0,
-            entries: [EntryView {
-                claim: 0,
-                state: 0,
-                tracked: false,
-                undrawn: false,
-                lag_um: 0,
-            }; ENTRIES],
+            entries: [EntryView::EMPTY; ENTRIES],
             claimed_since_us: [0; ENTRIES],
             lag_since_us: [0; ENTRIES],
             started: false,
