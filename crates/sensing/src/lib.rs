@@ -259,8 +259,6 @@ pub struct Sensing {
     /// The last processed sample's raw codes and beacon (for the crosstalk correction).
     prev: Option<(u8, [i32; 2])>,
     levels: [u16; BEACONS],
-    /// 2^16 / the configuration's sum reference, for the feedback without a division.
-    s_ref_recip_q16: i32,
     filters: [Filter; BEACONS],
     config: Config,
     /// The calibration table check.
@@ -298,7 +296,6 @@ impl Sensing {
             sampled: None,
             prev: None,
             levels: [regs::sensing::LED_LEVEL_RESET_MA; BEACONS],
-            s_ref_recip_q16: (1 << 16) / DEFAULT_S_REF_CODES,
             filters: [Filter::new(); BEACONS],
             config: Config::DEFAULT,
             checker: Checker::new(),
@@ -384,9 +381,6 @@ impl Sensing {
             out.event = Event::BadCalibration(r).code();
         }
         if let Some(c) = input.config {
-            if c.s_ref_codes != self.config.s_ref_codes {
-                self.s_ref_recip_q16 = fx::div(1 << 16, c.s_ref_codes);
-            }
             self.config = c;
         }
         let (Some(conv), Some(s)) = (self.sampled.take(), input.sample) else {
@@ -436,12 +430,7 @@ impl Sensing {
             }
             self.filters[b].push(q2, cfg.has(opt::ADAPTIVE_FILTER));
             self.levels[b] = if cfg.has(opt::CURRENT_FEEDBACK) {
-                feedback_ma(
-                    self.levels[b] as i32,
-                    sum,
-                    cfg.s_ref_codes,
-                    self.s_ref_recip_q16,
-                ) as u16
+                feedback_ma(self.levels[b] as i32, sum, cfg.s_ref_codes) as u16
             } else {
                 cfg.level_ma as u16
             };
@@ -631,10 +620,13 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
 /// Whether `p` lies outside the calibrated area (with [`AREA_MARGIN_UM`]).
 #[inline(always)]
 fn outside(p: [i32; 2], area: &[i32; 4]) -> bool {
-    p[0] < area[0] - AREA_MARGIN_UM
-        || p[0] > area[1] + AREA_MARGIN_UM
-        || p[1] < area[2] - AREA_MARGIN_UM
-        || p[1] > area[3] + AREA_MARGIN_UM
+    // Each term is negative when the point lies beyond that side: one sign test, no
+    // chain of compares (their flags were clobbered on the 68k; docs/toolchain.md class 1).
+    let m = (p[0] - (area[0] - AREA_MARGIN_UM))
+        | ((area[1] + AREA_MARGIN_UM) - p[0])
+        | (p[1] - (area[2] - AREA_MARGIN_UM))
+        | ((area[3] + AREA_MARGIN_UM) - p[1]);
+    m < 0
 }
 
 /// Removes the previous beacon's residue in the analog filters from a sample (`q2`, Q2
@@ -649,14 +641,22 @@ fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u
     q2[1] += ((raw[1] - prev[1]) * f) >> 14;
 }
 
-/// The next drive current: Newton's step towards the sum level `s_ref` (the sum is
-/// proportional to the current), clamped to the driver's range. `recip_q16` is 2^16 /
-/// `s_ref` (the products stay within 32 bits: |s_ref - sum| < 2^11, recip < 2^8,
-/// level < 2^10).
-#[inline(always)]
-fn feedback_ma(level: i32, sum: i32, s_ref: i32, recip_q16: i32) -> i32 {
-    let f_q16 = (s_ref - sum) * recip_q16;
-    (level + ((f_q16 * level) >> 16)).clamp(LEVEL_MIN_MA, LEVEL_MAX_MA)
+/// The next drive current: the current that gives the sum level `s_ref` if the sum is
+/// proportional to the current, level x s_ref / sum, clamped to the driver's range. (The
+/// linearised step level x (2 - sum / s_ref) it replaces sent a beacon more than twice too
+/// bright at the reset current, one near the camera axis, to the minimum current, where it
+/// read as occluded and was reset again: found by the reflex campaign, the beacon was never
+/// valid.) level < 2^10 and s_ref < 2^11: the product fits in 32 bits. Not inlined: inlined,
+/// it moved a condition-code clobber into `Sensing::step` (docs/toolchain.md class 1).
+#[inline(never)]
+fn feedback_ma(level: i32, sum: i32, s_ref: i32) -> i32 {
+    // Sign masks, not max/clamp: their compares' flags were clobbered on the 68k
+    // (docs/toolchain.md class 1). -1 where the condition holds.
+    let pick = |m: i32, a: i32, b: i32| b ^ ((a ^ b) & m);
+    let sum = pick((sum - 1) >> 31, 1, sum);
+    let v = fx::div(level * s_ref, sum);
+    let v = pick((v - LEVEL_MIN_MA) >> 31, LEVEL_MIN_MA, v);
+    pick((LEVEL_MAX_MA - v) >> 31, LEVEL_MAX_MA, v)
 }
 
 /// Link lengths in micrometres, from the arm's geometry (the one source).

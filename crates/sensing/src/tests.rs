@@ -268,13 +268,19 @@ proptest! {
     }
 
     #[test]
-    fn the_current_feedback_settles_on_the_reference(gain in 0.3f64..3.0) {
-        // Sum proportional to the drive: gain codes per mA, the reference reachable.
+    fn the_current_feedback_settles_on_the_reference(gain in 0.3f64..8.0) {
+        // Sum proportional to the drive: gain codes per mA, the reference reachable. From
+        // the reset current, a beacon up to 5x too bright (near the camera axis) settles
+        // without ever being driven so low that it reads as occluded.
         let s_ref = DEFAULT_S_REF_CODES;
         let mut level = 560;
         for _ in 0..8 {
             let sum = (level as f64 * gain) as i32;
-            level = crate::feedback_ma(level, sum.min(2047), s_ref, (1 << 16) / s_ref);
+            level = crate::feedback_ma(level, sum.min(2047), s_ref);
+            let reachable_low = (s_ref as f64 / gain) >= LEVEL_MIN_MA as f64;
+            if reachable_low {
+                prop_assert!(level as f64 * gain >= OCCLUDED_BELOW_CODES as f64, "level {level} reads occluded");
+            }
         }
         let sum = level as f64 * gain;
         let reachable = (s_ref as f64 / gain) <= LEVEL_MAX_MA as f64 && (s_ref as f64 / gain) >= LEVEL_MIN_MA as f64;
