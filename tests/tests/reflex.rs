@@ -159,12 +159,6 @@ fn script(global: &mut [u8], n: usize) -> Vec<u32> {
         if o[0] != 0 {
             sub = [o[1] as f64 * 1e-6, o[2] as f64 * 1e-6];
         }
-        if std::env::var("REFLEX_DEBUG").is_ok() && k < 460 && k % 10 == 0 {
-            eprintln!(
-                "{k}: th {th:.3?} w {w:.2?} sub {sub:.3?} flags {:#x} goal {inside:.3?}",
-                o[3]
-            );
-        }
     }
     out
 }
