@@ -45,7 +45,8 @@ impl Kind {
             Kind::Moving => 4.0,
         }
     }
-    fn name(self) -> &'static str {
+    /// Its name in output (directories, scenario names).
+    pub fn name(self) -> &'static str {
         match self {
             Kind::Static => "static",
             Kind::Moving => "moving",

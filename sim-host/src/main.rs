@@ -215,10 +215,10 @@ fn main() -> ExitCode {
                 if n == 0 {
                     continue;
                 }
-                let name = format!("{kind:?}").to_lowercase();
+                let name = kind.name();
                 let bar = indicatif::ProgressBar::new(n);
-                bar.set_message(name.clone());
-                let dir = out.join(&name);
+                bar.set_message(name);
+                let dir = out.join(name);
                 match sim_host::campaign::run_to_dir(kind, seed, n, threads, &dir, &|| bar.inc(1)) {
                     Ok(s) => {
                         bar.finish_and_clear();

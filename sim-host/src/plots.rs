@@ -325,18 +325,25 @@ pub fn cspace_map(path: &Path, title: &str, cells: &[MapCell]) -> Result<(), Str
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 
-fn panel(
-    area: &Area<'_>,
-    caption: &str,
-    cells: &[MapCell],
-    colour: &dyn Fn(MapCell) -> Option<RGBColor>,
-    keys: &[(&str, RGBColor)],
-) -> Result<(), String> {
-    use std::f64::consts::{PI, TAU};
-    let px = TAU / 128.0;
+/// A chart over a C-space map's area.
+type TorusChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// A C-space chart on `area`: theta1 across, theta2 (`y_desc`) up, both -pi..pi as in the
+/// thesis's figures, with `caption` at its size and `margin`.
+fn torus_chart<'a, 'b>(
+    area: &'a Area<'b>,
+    caption: (&str, u32),
+    margin: u32,
+    y_desc: &str,
+) -> Result<TorusChart<'a, 'b>, String> {
+    use std::f64::consts::PI;
     let mut c = ChartBuilder::on(area)
-        .caption(caption, ("sans-serif", 16))
-        .margin(10)
+        .caption(caption.0, ("sans-serif", caption.1))
+        .margin(margin)
         .x_label_area_size(40)
         .y_label_area_size(50)
         .build_cartesian_2d(-PI..PI, -PI..PI)
@@ -344,23 +351,28 @@ fn panel(
     c.configure_mesh()
         .disable_mesh()
         .x_desc("theta1 (rad)")
-        .y_desc("theta2 (rad)")
+        .y_desc(y_desc)
         .draw()
         .map_err(err)?;
-    // Pixel i covers [i px, (i + 1) px); shown in -pi..pi.
-    let wrap = |i: usize| {
-        let a = i as f64 * px;
-        if a >= PI {
-            a - TAU
-        } else {
-            a
-        }
-    };
+    Ok(c)
+}
+
+/// Draws every map pixel `colour` gives a colour (pixel `k` = i2 x 128 + i1 covers
+/// [i, i + 1) pixels of 2 pi / 128 on each axis, shown in -pi..pi) and a legend entry per
+/// key.
+fn draw_pixels(
+    c: &mut TorusChart<'_, '_>,
+    colour: impl Fn(usize) -> Option<RGBColor>,
+    keys: &[(&str, RGBColor)],
+) -> Result<(), String> {
+    use std::f64::consts::{PI, TAU};
+    let px = TAU / 128.0;
+    let at = |i: usize| (i as f64 * px + PI).rem_euclid(TAU) - PI;
     let mut rects = Vec::new();
     for i2 in 0..128usize {
         for i1 in 0..128usize {
-            if let Some(col) = colour(cells[i2 * 128 + i1]) {
-                let (x, y) = (wrap(i1), wrap(i2));
+            if let Some(col) = colour(i2 * 128 + i1) {
+                let (x, y) = (at(i1), at(i2));
                 rects.push(Rectangle::new([(x, y), (x + px, y + px)], col.filled()));
             }
         }
@@ -372,6 +384,18 @@ fn panel(
             .label(label)
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], col.filled()));
     }
+    Ok(())
+}
+
+fn panel(
+    area: &Area<'_>,
+    caption: &str,
+    cells: &[MapCell],
+    colour: &dyn Fn(MapCell) -> Option<RGBColor>,
+    keys: &[(&str, RGBColor)],
+) -> Result<(), String> {
+    let mut c = torus_chart(area, (caption, 16), 10, "theta2 (rad)")?;
+    draw_pixels(&mut c, |k| colour(cells[k]), keys)?;
     // Top left: the images sit in the middle of the map.
     c.configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
@@ -406,49 +430,22 @@ pub fn cspace_path(
     font()?;
     let root = BitMapBackend::new(path, (760, 760)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
-    let mut c = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(-PI..PI, -PI..PI)
-        .map_err(err)?;
-    c.configure_mesh()
-        .disable_mesh()
-        .x_desc("theta1 (rad)")
-        .y_desc("theta2 (rad, absolute)")
-        .draw()
-        .map_err(err)?;
-    let px = TAU / 128.0;
-    let wrap = |a: f64| (a + PI).rem_euclid(TAU) - PI;
-    let cell = |i: usize| wrap(i as f64 * px);
-    let mut rects = Vec::new();
-    for i2 in 0..128usize {
-        for i1 in 0..128usize {
-            let k = i2 * 128 + i1;
-            let col = if pic.exact[k] {
-                Some(RGBColor(60, 60, 60))
+    let mut c = torus_chart(&root, (title, 18), 12, "theta2 (rad, absolute)")?;
+    let (dark, light) = (RGBColor(60, 60, 60), RGBColor(170, 190, 225));
+    draw_pixels(
+        &mut c,
+        |k| {
+            if pic.exact[k] {
+                Some(dark)
             } else if pic.marked[k] {
-                Some(RGBColor(170, 190, 225))
+                Some(light)
             } else {
                 None
-            };
-            if let Some(col) = col {
-                let (x, y) = (cell(i1), cell(i2));
-                rects.push(Rectangle::new([(x, y), (x + px, y + px)], col.filled()));
             }
-        }
-    }
-    c.draw_series(rects).map_err(err)?;
-    for (label, col) in [
-        ("map: collides", RGBColor(60, 60, 60)),
-        ("map: margin", RGBColor(170, 190, 225)),
-    ] {
-        c.draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
-            .map_err(err)?
-            .label(label)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], col.filled()));
-    }
+        },
+        &[("map: collides", dark), ("map: margin", light)],
+    )?;
+    let wrap = |a: f64| (a + PI).rem_euclid(TAU) - PI;
     // The path, cut where it wraps around the torus.
     let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
     let mut last: Option<(f64, f64)> = None;

@@ -170,13 +170,12 @@ fn image_case(
         // Measure after the reflex has had half a second to get going.
         if k as f64 * step_ms >= 500.0 {
             let hb = sys.heartbeat(BoardId::Reflex);
-            let h = *h0.get_or_insert((hb, sys.now));
-            passes = hb.wrapping_sub(h.0) as u64;
+            let (hb0, _) = *h0.get_or_insert((hb, sys.now));
+            passes = hb.wrapping_sub(hb0) as u64;
             if let Ok((st, _)) = vme_map::REFLEX_STATUS.read(&mut sys.bus()) {
                 tests_sum += st.tests as f64;
                 samples += 1;
             }
-            let _ = h;
         }
     }
     let (_, c0) = h0.ok_or("the case is shorter than its warm-up")?;

@@ -215,8 +215,9 @@ pub fn run(scenario: &Scenario, opts: RunOptions) -> (String, Summary) {
     (trace, summary)
 }
 
-/// Runs `scenario`; returns the trace text, the summary, the plot samples and the end state.
-pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, Vec<Sample>, End) {
+/// Runs `scenario`; returns the trace text, the summary, the plot samples and the
+/// simulation as it ended.
+pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, Vec<Sample>, Sim) {
     let mut sim = Sim::new(scenario.config.clone());
     let total = (scenario.config.duration_s / scenario.config.dt_s).round() as u64;
     // The bar appears only once a run has taken more than a second of wall time.
@@ -246,7 +247,7 @@ pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, V
     bar.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
     let summary = summarize(scenario, &mut sim, wall_s);
-    (trace, summary, samples, End::of(&mut sim))
+    (trace, summary, samples, sim)
 }
 
 /// The state of the world at the end of a run, for the C-space picture.
@@ -326,7 +327,10 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
 pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
     std::fs::create_dir_all(out).map_err(io)?;
-    let (trace, summary, samples, end) = run_sampled(scenario, opts);
+    let (trace, summary, samples, mut sim) = run_sampled(scenario, opts);
+    // The exact image of the obstacles is costly (an oracle verdict per pixel): only for
+    // the picture.
+    let end = End::of(&mut sim);
     std::fs::write(out.join("trace.csv"), trace).map_err(io)?;
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
     std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;

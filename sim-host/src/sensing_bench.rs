@@ -388,19 +388,18 @@ pub fn image_rate(dir: &std::path::Path) -> Result<(f64, f64), String> {
         crate::boot::System::power_up(dir, &[BoardId::Sensing]).map_err(|e| e.to_string())?;
     sys.boards[0].io = lit_camera(1);
     sys.run_ms(1200.0);
-    let f0 = vme_map::OBJECTS
-        .read(&mut sys.bus())
-        .map_err(|_| "torn")?
-        .0
-        .frame;
-    let h0 = sys.heartbeat(BoardId::Sensing);
+    // The object table's frame count and the board's heartbeat (one beat a slot).
+    let count = |sys: &mut crate::boot::System| -> Result<(u32, u32), String> {
+        let frame = vme_map::OBJECTS
+            .read(&mut sys.bus())
+            .map_err(|_| "torn")?
+            .0
+            .frame;
+        Ok((frame, sys.heartbeat(BoardId::Sensing)))
+    };
+    let (f0, h0) = count(&mut sys)?;
     sys.run_ms(1000.0);
-    let f1 = vme_map::OBJECTS
-        .read(&mut sys.bus())
-        .map_err(|_| "torn")?
-        .0
-        .frame;
-    let h1 = sys.heartbeat(BoardId::Sensing);
+    let (f1, h1) = count(&mut sys)?;
     let slots = h1.wrapping_sub(h0) as f64;
     Ok((
         f1.wrapping_sub(f0) as f64,

@@ -19,27 +19,34 @@ pub const PI_URAD: i32 = 3_141_593;
 /// the tip). Each further whole turn adds up to 0.4 micro-radians ([`PI_URAD`] is rounded).
 pub const SIN_COS_ERR_Q30: i32 = 8_000;
 
+/// The 21 CORDIC rounds on (`x`, `y`) with angle accumulator `z`, each rotating by
+/// atan(2^-i) one way or the other as the mask `dir` (-1 or 0, evaluated each round) says.
+/// Sign arithmetic, no select; unrolled: the M68k backend put a register copy between the
+/// loop's compare and its branch when this was a loop (docs/toolchain.md class 1). Rotation
+/// mode ([`sin_cos_q30`]) steers by `z`, vectoring mode ([`atan2_urad`]) by `y`.
+macro_rules! cordic_rounds {
+    ($x:ident, $y:ident, $z:ident, $dir:expr) => {
+        cordic_rounds!(@ $x, $y, $z, $dir; 0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20)
+    };
+    (@ $x:ident, $y:ident, $z:ident, $dir:expr; $($i:literal)*) => {$(
+        let m = $dir;
+        let dx = (($y >> $i) ^ m) - m;
+        let dy = (($x >> $i) ^ m) - m;
+        $x -= dx;
+        #[allow(unused_assignments)]
+        {
+            $y += dy;
+            $z -= (ATAN_URAD[$i] ^ m) - m;
+        }
+    )*};
+}
+
 /// `(sin, cos)` of `theta_urad` in Q30. Any angle: it is reduced to (-pi, pi] first.
 pub fn sin_cos_q30(theta_urad: i32) -> (i32, i32) {
     let (mut z, flip) = reduce(theta_urad);
     let (mut x, mut y) = (INV_GAIN_Q30, 0i32);
-    // Unrolled: the M68k backend put a register copy between the loop's compare and its
-    // branch when this was a loop (docs/toolchain.md class 1).
-    macro_rules! round {
-        ($($i:literal)*) => {$(
-            // m = 0 rotates positive (z >= 0), -1 negative: sign arithmetic, no select.
-            let m = z >> 31;
-            let dx = ((y >> $i) ^ m) - m;
-            let dy = ((x >> $i) ^ m) - m;
-            x -= dx;
-            y += dy;
-            #[allow(unused_assignments)]
-            {
-                z -= (ATAN_URAD[$i] ^ m) - m;
-            }
-        )*};
-    }
-    round!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20);
+    // m = 0 rotates positive (z >= 0), -1 negative.
+    cordic_rounds!(x, y, z, z >> 31);
     ((y ^ flip) - flip, (x ^ flip) - flip)
 }
 
@@ -85,25 +92,11 @@ pub fn atan2_urad(y: i32, x: i32) -> (i32, i32) {
         (y & !left) | (-x & up) | (x & down),
         ((PI_URAD / 2) & up) - ((PI_URAD / 2) & down),
     );
-    macro_rules! round {
-        ($($i:literal)*) => {$(
-            // m = -1 rotates clockwise (y >= 0), 0 counter-clockwise: drives y to 0.
-            let m = !(y >> 31);
-            let dx = ((y >> $i) ^ m) - m;
-            let dy = ((x >> $i) ^ m) - m;
-            x -= dx;
-            y += dy;
-            #[allow(unused_assignments)]
-            {
-                z -= (ATAN_URAD[$i] ^ m) - m;
-            }
-        )*};
-    }
-    round!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20);
+    // m = -1 rotates clockwise (y >= 0), 0 counter-clockwise: drives y to 0.
+    cordic_rounds!(x, y, z, !(y >> 31));
     // The last rounds may leave z just beyond +-pi for vectors on the negative x axis.
     let over = (PI_URAD - z) >> 31;
     z -= (2 * PI_URAD) & over;
-    let _ = y;
     (z, x)
 }
 

@@ -335,7 +335,7 @@ impl Reflex {
         // The inputs must be good; until they first are, the arm holds without a fault.
         let problem = self.monitor.observe(&inp.health, self.now_us);
         if problem.is_none() && !self.healthy_once && self.monitor.behind() {
-            out.subgoal_urad = Some(self.hold_point(sv));
+            out.subgoal_urad = Some(self.hold_point());
             out.flags = flags::WAITING;
             return out;
         }
@@ -343,7 +343,7 @@ impl Reflex {
             if self.healthy_once || self.now_us.wrapping_sub(self.started_us) > health::STARTUP_US {
                 return self.hold_output(Fault::Input(p), sv.arrest_urad, out);
             }
-            out.subgoal_urad = Some(self.hold_point(sv));
+            out.subgoal_urad = Some(self.hold_point());
             out.flags = flags::WAITING;
             return out;
         }
@@ -408,7 +408,7 @@ impl Reflex {
     }
 
     /// While the inputs are not yet good after power-up: the arrest point of the first pass.
-    fn hold_point(&mut self, _sv: ServoView) -> [i32; 2] {
+    fn hold_point(&self) -> [i32; 2] {
         self.last.unwrap_or(self.hold_at)
     }
 
