@@ -213,7 +213,7 @@ impl Config {
 
 /// Smallest plausible braking acceleration per link, angle units / s^2: u^ (the servo's
 /// fraction of umax) over the inertia with the servo's prior error (1.25 x).
-const BRAKE_U_S2: [i32; 2] = [brake_u_s2(&arm::LINK1), brake_u_s2(&arm::LINK2)];
+pub const BRAKE_U_S2: [i32; 2] = [brake_u_s2(&arm::LINK1), brake_u_s2(&arm::LINK2)];
 
 const fn brake_u_s2(l: &arm::Link) -> i32 {
     let acc = l.torque_limit_nm * servo::params::TUNED_UHAT_FRACTION

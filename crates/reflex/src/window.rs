@@ -24,6 +24,30 @@ pub trait Map {
     fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32;
     /// The bitwise or of stripe words `i1 .. i1 + n` (`i1 + n <= 128`).
     fn stripes_or(&mut self, i1: u32, n: u32) -> u32;
+    /// Bit `k` set when pixel (`i1 + k`, `i2`) is marked, `k` < 32 (`i1` a multiple of 32):
+    /// one word of a row of the planner's bitmap (`crates/planner`). The default reads
+    /// pixel by pixel through [`Map::row_or`].
+    fn row_bits(&mut self, i2: u32, i1: u32) -> u32 {
+        let mut bits = 0;
+        let mut k = 0;
+        while k < 32 {
+            let w = self.row_or(i2, i1 + k, 1);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
+    }
+    /// Bit `k` set when stripe `i1 + k` is marked, `k` < 32 (`i1` a multiple of 32).
+    fn stripe_bits(&mut self, i1: u32) -> u32 {
+        let mut bits = 0;
+        let mut k = 0;
+        while k < 32 {
+            let w = self.stripes_or(i1 + k, 1);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
+    }
 }
 
 /// A map held in plain slices: 128 x 128 words (row `i2` after row `i2 - 1`) and 128

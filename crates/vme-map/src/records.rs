@@ -330,6 +330,37 @@ pub mod reflex_flags {
     pub const WAITING: u32 = 1 << 11;
 }
 
+/// Codes of the low byte of [`PlannerGoal::mode`] (thesis ch. VI; `crates/planner` sets
+/// them; bits 8-15 hold the approach, 0-7).
+pub mod planner_mode {
+    /// No goal yet (the wand not seen): the request is the arm's arrest point.
+    pub const IDLE: u32 = 0;
+    /// Free mode: the request is the goal.
+    pub const FREE: u32 = 1;
+    /// Following an obstacle wall: the request is the next cell along it.
+    pub const WALL: u32 = 2;
+    /// The goal cannot be reached: holding where the arm was ([`PlannerGoal::reason`] says why).
+    pub const UNREACHABLE: u32 = 3;
+    /// No servo state this cycle: the last request again.
+    pub const HOLD: u32 = 4;
+}
+
+/// Codes of [`PlannerGoal::reason`].
+pub mod planner_reason {
+    /// Nothing to report.
+    pub const NONE: u32 = 0;
+    /// Both of the goal's poses are in (or within a pixel of) an obstacle's C-space image.
+    pub const GOAL_IN_OBSTACLE: u32 = 1;
+    /// The goal is free but enclosed: outside the free region around the arm.
+    pub const ENCLOSED: u32 = 2;
+    /// Every approach went round its obstacle back to the hit point (or ran out of time).
+    pub const CYCLED: u32 = 3;
+    /// The wand has not been seen.
+    pub const NO_GOAL: u32 = 4;
+    /// The servo state read torn.
+    pub const SERVO: u32 = 5;
+}
+
 record! {
     /// What the reflex's last pass did (written by the reflex board; for the host's monitor
     /// and the benches).

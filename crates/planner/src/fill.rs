@@ -1,0 +1,167 @@
+//! Reachability (beyond the thesis, which had no test for an unreachable goal but cycling,
+//! ch. VI section 4): the set of cells the arm can reach from where it is, through cells that
+//! are not blocked ([`crate::grid`]), found by a fill of the torus in bitmap rows, a few rows
+//! per planner cycle, and started again when it settles. Each row takes what its neighbours
+//! above and below reached, keeps its free cells, and spreads along its free runs; passes go
+//! down then up the map until one changes nothing. A settled fill is the whole connected
+//! free region around the arm (4-connected, the wall follower's moves): a goal outside it
+//! cannot be reached while the map stays as it is.
+
+use crate::grid::{spread, Grid, Row, SIDE, WORDS};
+
+/// Fill rows per planner cycle.
+pub const ROWS_PER_CYCLE: u32 = 16;
+/// Passes after which an unsettled fill is abandoned (and started again): a free region
+/// needs one pass per turn of its most winding path; 128 x 128 random disks need < 10.
+pub const MAX_PASSES: u32 = 48;
+
+/// The fill's state.
+#[derive(Clone, Debug)]
+pub struct Fill {
+    reach: [Row; 128],
+    row: u32,
+    pass: u32,
+    changed: u32,
+    /// Fills settled so far.
+    settled: u32,
+    /// Whether the last settled fill is in `last` (the working one is in `reach`).
+    has_last: bool,
+    last: [Row; 128],
+}
+
+impl Default for Fill {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[inline(always)]
+fn bit(rows: &[Row; 128], c: [i32; 2]) -> u32 {
+    let i1 = (c[0] & (SIDE - 1)) as u32;
+    let i2 = (c[1] & (SIDE - 1)) as usize;
+    (rows[i2][(i1 >> 5) as usize] >> (i1 & 31)) & 1
+}
+
+impl Fill {
+    /// No fill yet.
+    pub const fn new() -> Self {
+        Self {
+            reach: [[0; WORDS]; 128],
+            row: 0,
+            pass: 0,
+            changed: 0,
+            settled: 0,
+            has_last: false,
+            last: [[0; WORDS]; 128],
+        }
+    }
+
+    /// Fills settled so far.
+    pub fn settled(&self) -> u32 {
+        self.settled
+    }
+
+    /// 1 when the last settled fill reached cell `c`, 0 when it did not, 2 when no fill
+    /// has settled yet.
+    pub fn reached(&self, c: [i32; 2]) -> u32 {
+        if !self.has_last {
+            return 2;
+        }
+        bit(&self.last, c)
+    }
+
+    /// Starts a fill from the free cells within two of `from` (the arm may have stopped
+    /// closer than a pixel to a wall).
+    #[inline(never)]
+    pub fn start(&mut self, g: &Grid, from: [i32; 2]) {
+        clear(&mut self.reach);
+        let mut d2 = -2;
+        while d2 <= 2 {
+            let mut d1 = -2;
+            while d1 <= 2 {
+                let c = [from[0] + d1, from[1] + d2];
+                let free = g.blocked(c) ^ 1;
+                let i1 = (c[0] & (SIDE - 1)) as u32;
+                let i2 = (c[1] & (SIDE - 1)) as usize;
+                self.reach[i2][(i1 >> 5) as usize] |= free << (i1 & 31);
+                d1 += 1;
+            }
+            d2 += 1;
+        }
+        self.row = 0;
+        self.pass = 0;
+        self.changed = 0;
+    }
+
+    /// Works `rows` rows of the fill. Returns 1 when the fill settled (or gave up) in
+    /// this call: the caller starts the next one.
+    #[inline(never)]
+    pub fn work(&mut self, g: &Grid, rows: u32) -> u32 {
+        let mut n = 0;
+        while n < rows {
+            // Down on even passes, up on odd ones.
+            let r = if self.pass & 1 == 0 {
+                self.row
+            } else {
+                127 - self.row
+            };
+            self.changed |= self.update_row(g, r);
+            self.row += 1;
+            if self.row == 128 {
+                self.row = 0;
+                self.pass += 1;
+                if self.changed == 0 {
+                    core::mem::swap(&mut self.reach, &mut self.last);
+                    self.has_last = true;
+                    self.settled += 1;
+                    return 1;
+                }
+                if self.pass >= MAX_PASSES {
+                    return 1;
+                }
+                self.changed = 0;
+            }
+            n += 1;
+        }
+        0
+    }
+
+    /// One row: what the rows above and below reached, its own free cells, spread along
+    /// the row. Returns 1 if the row changed.
+    #[inline(never)]
+    fn update_row(&mut self, g: &Grid, r: u32) -> u32 {
+        let up = ((r + 127) & 127) as usize;
+        let dn = ((r + 1) & 127) as usize;
+        let b = g.blocked_row(r);
+        let free: Row = [!b[0], !b[1], !b[2], !b[3]];
+        let mut n: Row = [0; WORDS];
+        merge(&mut n, &self.reach[r as usize], &self.reach[up], &self.reach[dn]);
+        spread(&mut n, &free);
+        let old = &mut self.reach[r as usize];
+        let diff = (n[0] ^ old[0]) | (n[1] ^ old[1]) | (n[2] ^ old[2]) | (n[3] ^ old[3]);
+        old[0] = n[0];
+        old[1] = n[1];
+        old[2] = n[2];
+        old[3] = n[3];
+        (diff != 0) as u32
+    }
+}
+
+/// `n` = `a` | `b` | `c`.
+#[inline(never)]
+fn merge(n: &mut Row, a: &Row, b: &Row, c: &Row) {
+    n[0] = a[0] | b[0] | c[0];
+    n[1] = a[1] | b[1] | c[1];
+    n[2] = a[2] | b[2] | c[2];
+    n[3] = a[3] | b[3] | c[3];
+}
+
+/// Clears a bitmap.
+#[inline(never)]
+fn clear(rows: &mut [Row; 128]) {
+    let mut r = 0;
+    while r < 128 {
+        rows[r] = [0; WORDS];
+        r += 1;
+    }
+}

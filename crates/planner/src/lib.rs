@@ -1,0 +1,759 @@
+//! Local planning (thesis ch. VI): a Bug-style planner in C-space that leads the reflex
+//! around obstacles it cannot get past alone, and says so when the goal cannot be reached.
+//!
+//! * **Free mode** (ch. VI section 5): the goal itself is the request to the reflex, which
+//!   with the servo executes the thesis's "M-path" (time-optimal motion, deflected by the
+//!   reflexes). When the reflex flags a stall (`reflex_flags::STALLED`: at rest, short of the
+//!   goal, nowhere safe toward it), the arm's cell is a **hit point** H and the planner turns
+//!   to wall following.
+//! * **Wall following** (section 4, algorithm step 2): a virtual bug traces the boundary of
+//!   the blocked cells ([`grid`]) with the wall on one side, two cells ahead of the arm; its
+//!   cell is the request. It ends when (a) the bug meets the **M-line** from H to the goal
+//!   closer to the goal than H (a leave point), the line pivoting about H as the goal moves;
+//!   (b) the **real trajectory** to the goal is clear ([`sight`]; the thesis's first unbuilt
+//!   fix, which ends the looping of fig. VI.2); (c) the bug reaches the goal. A bug that
+//!   finds no wall (the map changed) looks for it in the direction it was last felt, a few
+//!   cells, and otherwise hands back to free mode (the wall-lost search).
+//! * **Hit point glued to the wall** (the second unbuilt fix): every cycle, H is moved along
+//!   the M-line to the last free cell before the wall, so that moving obstacles and sensor
+//!   noise do not leave it in free space (never revisited) or inside the obstacle.
+//! * **Approaches** on the torus (section 4): a bug back at its hit point without a leave
+//!   point tries the other way round, then the goal's other images (reached by turning a link
+//!   the other way), eight approaches in all.
+//! * **Reachability** ([`fill`], beyond the thesis): a fill of the free cells from the arm
+//!   settles every ~0.1 s; a goal whose poses (elbow either way) are outside it in two fills
+//!   running is unreachable: the planner holds the arm where it is and says why (goal inside
+//!   an obstacle or enclosed). The same fill picks the pose to go for. Together with the
+//!   approaches and a time limit on wall following, no goal makes the planner loop forever.
+//!
+//! The Bug rule that makes it converge: a leave point by the M-line must be nearer the goal
+//! than the hit point, and the M-path from it approaches the goal on both axes (the servo
+//! does not overshoot), so successive hit points come strictly nearer the goal. A leave by
+//! the clear trajectory needs no such rule while it is right; if the arm stalls again no
+//! nearer than before, trajectory leaves must from then on be nearer too.
+//!
+//! Angles: micro-radians at the interfaces, angle units (2 pi / 32768) and unwrapped pixel
+//! cells (256 units) inside. Nothing here touches hardware: the board hands in a
+//! [`reflex::window::Map`].
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+
+pub mod fill;
+pub mod grid;
+pub mod sight;
+#[cfg(test)]
+mod tests;
+
+use fill::Fill;
+use grid::Grid;
+use reflex::goal::{self, TURN_URAD};
+use reflex::window::Map;
+use reflex::{u_to_urad, urad_to_u, ServoView};
+use sight::{Sight, Verdict};
+
+pub use vme_map::records::{planner_mode as mode, planner_reason as reason};
+use vme_map::records::reflex_flags as rf;
+
+/// Angle units per pixel.
+pub const PIX_U: i32 = 256;
+/// The bug leads the arm by at most this many cells (Chebyshev).
+pub const LEAD_PX: i32 = 2;
+/// After a mode change, the reflex's flags are not acted on for this long (its stall flag
+/// belongs to the previous request).
+pub const SETTLE_US: u32 = 60_000;
+/// Wall following longer than this without leaving: the next approach.
+pub const WALL_LIMIT_US: u32 = 20_000_000;
+/// Cells the wall-lost search looks ahead.
+pub const SEARCH_PX: i32 = 4;
+/// Cells the hit point may slide along the M-line per cycle to stay on the wall.
+pub const GLUE_PX: i32 = 4;
+/// The wand must move this far (either axis, micrometres) for the goal to be recomputed.
+pub const WAND_MOVE_UM: i32 = reflex::WAND_MOVE_UM;
+/// Approaches before the goal is given up as unreachable (two ways round each of four
+/// images of the goal on the torus).
+pub const APPROACHES: u32 = 8;
+/// Settled fills in a row that must agree the goal is out of reach.
+pub const UNREACHABLE_FILLS: u32 = 2;
+
+/// One cycle's inputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Input {
+    /// The servo's state, `None` if it read torn.
+    pub servo: Option<ServoView>,
+    /// The reflex's flags (`ReflexSubgoal::flags`), `None` if unread.
+    pub reflex_flags: Option<u32>,
+    /// The wand, micrometres, `None` when its beacon is not valid.
+    pub wand_um: Option<[i32; 2]>,
+}
+
+/// One cycle's outputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Output {
+    /// The request for the reflex (absolute angles).
+    pub request_urad: [i32; 2],
+    /// [`mode`] code, with the approach in bits 8-15.
+    pub mode: u32,
+    /// [`reason`] code.
+    pub reason: u32,
+    /// Whether to publish (false until the first servo state).
+    pub publish: bool,
+}
+
+/// What the planner is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// No goal yet.
+    Idle,
+    /// Requesting the goal.
+    Free,
+    /// Following a wall.
+    Wall,
+    /// Holding: the goal cannot be reached.
+    Unreachable(u32),
+}
+
+/// The planner's state between cycles.
+#[derive(Clone, Debug)]
+pub struct Planner {
+    grid: Grid,
+    fill: Fill,
+    sight: Sight,
+    mode: Mode,
+    now_us: u32,
+    mode_since_us: u32,
+    /// The wand position the goal was last computed from.
+    wand_um: [i32; 2],
+    /// The goal's two poses (wrapped), when known.
+    poses: Option<[[i32; 2]; 2]>,
+    /// Which pose is the goal.
+    pose: usize,
+    /// Goal image offsets in turns per axis (the approach), and the angles they are
+    /// relative to.
+    image: [i32; 2],
+    anchor_urad: [i32; 2],
+    approach: u32,
+    /// Hit point and its squared distance to the goal (cells).
+    hit: [i32; 2],
+    hit_d2: i32,
+    /// Squared distance of the last hit point to the goal, for the convergence check.
+    last_hit_d2: i32,
+    /// Trajectory leaves must be nearer than the hit point too.
+    strict_sight: bool,
+    bug: [i32; 2],
+    dir: u32,
+    /// 1: wall on the left (positive circulation), 3: on the right.
+    side: u32,
+    toward_wall: u32,
+    left_hit: bool,
+    prev_cross: i32,
+    /// Where the arm was held when the goal became unreachable.
+    hold_urad: [i32; 2],
+    unreachable_fills: u32,
+    last_request: [i32; 2],
+}
+
+impl Default for Planner {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The four directions: +theta1, +theta2, -theta1, -theta2.
+#[inline(always)]
+fn step_of(dir: u32) -> [i32; 2] {
+    match dir & 3 {
+        0 => [1, 0],
+        1 => [0, 1],
+        2 => [-1, 0],
+        _ => [0, -1],
+    }
+}
+
+#[inline(always)]
+fn add(a: [i32; 2], b: [i32; 2]) -> [i32; 2] {
+    [a[0] + b[0], a[1] + b[1]]
+}
+
+#[inline(always)]
+fn d2(a: [i32; 2], b: [i32; 2]) -> i32 {
+    let (x, y) = (a[0] - b[0], a[1] - b[1]);
+    x * x + y * y
+}
+
+#[inline(always)]
+fn cheb(a: [i32; 2], b: [i32; 2]) -> i32 {
+    (a[0] - b[0]).abs().max((a[1] - b[1]).abs())
+}
+
+/// The cell of an angle pair.
+#[inline(always)]
+pub fn cell_of(a_urad: [i32; 2]) -> [i32; 2] {
+    [urad_to_u(a_urad[0]) >> 8, urad_to_u(a_urad[1]) >> 8]
+}
+
+/// The centre of a cell, micro-radians.
+#[inline(always)]
+pub fn centre_urad(c: [i32; 2]) -> [i32; 2] {
+    [
+        u_to_urad(c[0] * PIX_U + PIX_U / 2),
+        u_to_urad(c[1] * PIX_U + PIX_U / 2),
+    ]
+}
+
+/// One step from `c` toward `g` along the axis with more to go.
+#[inline(always)]
+fn toward(c: [i32; 2], g: [i32; 2]) -> [i32; 2] {
+    let (x, y) = (g[0] - c[0], g[1] - c[1]);
+    if x.abs() >= y.abs() {
+        [c[0] + x.signum(), c[1]]
+    } else {
+        [c[0], c[1] + y.signum()]
+    }
+}
+
+impl Planner {
+    /// A fresh planner.
+    pub const fn new() -> Self {
+        Self {
+            grid: Grid::new(),
+            fill: Fill::new(),
+            sight: Sight::new(),
+            mode: Mode::Idle,
+            now_us: 0,
+            mode_since_us: 0,
+            wand_um: [0; 2],
+            poses: None,
+            pose: 0,
+            image: [0; 2],
+            anchor_urad: [0; 2],
+            approach: 0,
+            hit: [0; 2],
+            hit_d2: 0,
+            last_hit_d2: i32::MAX,
+            strict_sight: false,
+            bug: [0; 2],
+            dir: 0,
+            side: 1,
+            toward_wall: 0,
+            left_hit: false,
+            prev_cross: 0,
+            hold_urad: [0; 2],
+            unreachable_fills: 0,
+            last_request: [0; 2],
+        }
+    }
+
+    /// The planner's bitmap of the map (for tests and the host).
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// The hit point in use (cells), when following a wall.
+    pub fn hit(&self) -> Option<[i32; 2]> {
+        (self.mode == Mode::Wall).then_some(self.hit)
+    }
+
+    /// The goal in use: the chosen pose at the approach's image (absolute micro-radians).
+    pub fn goal_urad(&self, near: [i32; 2]) -> Option<[i32; 2]> {
+        let p = self.poses?[self.pose];
+        let _ = near;
+        Some([
+            goal::nearest(p[0], self.anchor_urad[0]) + self.image[0] * TURN_URAD,
+            goal::nearest(p[1], self.anchor_urad[1]) + self.image[1] * TURN_URAD,
+        ])
+    }
+
+    fn set_mode(&mut self, m: Mode) {
+        self.mode = m;
+        self.mode_since_us = self.now_us;
+    }
+
+    /// One planner cycle.
+    #[inline(never)]
+    pub fn step<M: Map + ?Sized>(&mut self, inp: &Input, map: &mut M) -> Output {
+        let mut out = Output {
+            request_urad: self.last_request,
+            mode: mode::HOLD,
+            reason: reason::NONE,
+            publish: false,
+        };
+        self.grid.refresh(map, grid::ROWS_PER_CYCLE);
+        let Some(sv) = inp.servo else {
+            // Keep publishing the last request: the reflex holds if the record stops.
+            out.publish = self.poses.is_some();
+            out.reason = reason::SERVO;
+            return out;
+        };
+        self.now_us = sv.t_us;
+        let arm = cell_of(sv.theta_urad);
+        out.publish = true;
+
+        // The reachability fill, always running.
+        if self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 || self.fill.settled() == 0 {
+            if self.fill.settled() > 0 {
+                self.judge(arm);
+            }
+            if self.fill.settled() == 0 && self.grid.sweeps() == 0 {
+                // Nothing read yet: do not settle on an empty map.
+            } else {
+                self.fill.start(&self.grid, arm);
+            }
+        }
+
+        // The goal.
+        if let Some(w) = inp.wand_um {
+            let moved = (w[0] - self.wand_um[0]).abs() > WAND_MOVE_UM
+                || (w[1] - self.wand_um[1]).abs() > WAND_MOVE_UM;
+            if self.poses.is_none() || moved {
+                self.new_goal(w, sv.theta_urad);
+            }
+        }
+        if self.poses.is_none() || self.grid.sweeps() == 0 {
+            self.last_request = sv.arrest_urad;
+            out.request_urad = sv.arrest_urad;
+            out.mode = mode::IDLE;
+            out.reason = reason::NO_GOAL;
+            return out;
+        }
+        if self.mode == Mode::Idle {
+            self.start_approach(0, sv.theta_urad);
+        }
+        let goal_urad = self.goal_urad(sv.theta_urad).unwrap_or(sv.theta_urad);
+        let goal_c = cell_of(goal_urad);
+        let flags = inp.reflex_flags.unwrap_or(0);
+        let settled = self.now_us.wrapping_sub(self.mode_since_us) > SETTLE_US;
+
+        match self.mode {
+            Mode::Idle => {}
+            Mode::Unreachable(_) => {}
+            Mode::Free => {
+                let stalled = flags & rf::STALLED != 0 && flags & rf::FROM_PLANNER != 0;
+                if settled && stalled && arm != goal_c {
+                    self.hit_wall(arm, goal_c, sv.theta_urad);
+                }
+            }
+            Mode::Wall => self.follow(arm, goal_c, sv),
+        }
+
+        let (req, m, why) = match self.mode {
+            Mode::Idle | Mode::Free => (goal_urad, mode::FREE, reason::NONE),
+            Mode::Wall => (centre_urad(self.bug), mode::WALL, reason::NONE),
+            Mode::Unreachable(r) => (self.hold_urad, mode::UNREACHABLE, r),
+        };
+        self.last_request = req;
+        out.request_urad = req;
+        out.mode = m | (self.approach << 8);
+        out.reason = why;
+        out
+    }
+
+    /// A new goal from the wand: its two poses; the pose the last fill reached (nearest the
+    /// arm among equals); the approach starts over if the goal moved by more than a cell.
+    fn new_goal(&mut self, w: [i32; 2], theta: [i32; 2]) {
+        let old = self.goal_urad(theta).map(cell_of);
+        self.wand_um = w;
+        let poses = goal::inverse(w[0], w[1]);
+        self.poses = Some(poses);
+        self.pose = self.pick_pose(&poses, theta);
+        let new = self.goal_urad(theta).map(cell_of);
+        let jump = match (old, new) {
+            (Some(a), Some(b)) => cheb(a, b) > 1,
+            _ => true,
+        };
+        if jump && self.mode != Mode::Idle {
+            // Keep the approach's image offsets relative to where the arm is now.
+            self.start_approach(0, theta);
+        }
+    }
+
+    /// The pose to go for: one the last settled fill reached, else the nearest.
+    fn pick_pose(&self, poses: &[[i32; 2]; 2], theta: [i32; 2]) -> usize {
+        let near = goal::choose(*poses, theta);
+        let first = usize::from(near != [
+            goal::nearest(poses[0][0], theta[0]),
+            goal::nearest(poses[0][1], theta[1]),
+        ]);
+        let other = 1 - first;
+        let r_first = self.fill.reached(cell_of(poses[first]));
+        let r_other = self.fill.reached(cell_of(poses[other]));
+        if r_first == 0 && r_other == 1 {
+            other
+        } else {
+            first
+        }
+    }
+
+    /// Approach `k`: the goal image and the way round (module docs).
+    fn start_approach(&mut self, k: u32, theta: [i32; 2]) {
+        self.approach = k;
+        self.anchor_urad = theta;
+        let p = self.poses.map(|p| p[self.pose]).unwrap_or(theta);
+        let away = |i: usize| {
+            let g = goal::nearest(p[i], theta[i]);
+            if g >= theta[i] {
+                -1
+            } else {
+                1
+            }
+        };
+        let img = k >> 1;
+        self.image = match img {
+            0 => [0, 0],
+            1 => [away(0), away(1)],
+            2 => [0, away(1)],
+            _ => [away(0), 0],
+        };
+        self.last_hit_d2 = i32::MAX;
+        self.strict_sight = false;
+        self.sight.stop();
+        self.set_mode(Mode::Free);
+    }
+
+    /// The next approach, or unreachable when all were tried.
+    fn next_approach(&mut self, theta: [i32; 2]) {
+        if self.approach + 1 >= APPROACHES {
+            self.hold_urad = theta;
+            self.set_mode(Mode::Unreachable(reason::CYCLED));
+        } else {
+            let k = self.approach + 1;
+            self.start_approach(k, theta);
+        }
+    }
+
+    /// A settled fill: the goal reachable or not.
+    fn judge(&mut self, arm: [i32; 2]) {
+        let _ = arm;
+        let Some(poses) = self.poses else { return };
+        let r0 = self.fill.reached(cell_of(poses[0]));
+        let r1 = self.fill.reached(cell_of(poses[1]));
+        if r0 == 1 || r1 == 1 {
+            self.unreachable_fills = 0;
+            // Go for a pose the fill reached.
+            let want = if r0 == 1 && r1 == 1 { self.pose } else { (r1 == 1) as usize };
+            if want != self.pose {
+                self.pose = want;
+                if self.mode != Mode::Idle {
+                    let theta = self.anchor_urad;
+                    self.start_approach(0, theta);
+                }
+            }
+            if let Mode::Unreachable(_) = self.mode {
+                let theta = self.hold_urad;
+                self.start_approach(0, theta);
+            }
+            return;
+        }
+        self.unreachable_fills += 1;
+        if self.unreachable_fills >= UNREACHABLE_FILLS {
+            if let Mode::Unreachable(_) = self.mode {
+                return;
+            }
+            let inside = self.grid.blocked(cell_of(poses[0])) & self.grid.blocked(cell_of(poses[1]));
+            let why = if inside != 0 {
+                reason::GOAL_IN_OBSTACLE
+            } else {
+                reason::ENCLOSED
+            };
+            self.hold_urad = self.last_request;
+            self.sight.stop();
+            self.set_mode(Mode::Unreachable(why));
+        }
+    }
+
+    /// The reflex stalled at `arm` short of `goal`: a hit point, wall following.
+    fn hit_wall(&mut self, arm: [i32; 2], goal: [i32; 2], theta: [i32; 2]) {
+        // The bug starts on the nearest free cell (the arm may stand nearer the wall).
+        let Some(start) = self.nearest_free(arm, goal) else {
+            return;
+        };
+        let d = d2(start, goal);
+        if d >= self.last_hit_d2 {
+            // No nearer than the last hit point: the M-path did not converge.
+            if self.strict_sight {
+                self.next_approach(theta);
+                return;
+            }
+            self.strict_sight = true;
+        }
+        // The wall: the blocked neighbour toward the goal, probing a few cells ahead.
+        let mut c = start;
+        let mut n = 0;
+        let mut wall_dir = None;
+        while n < SEARCH_PX {
+            let dir = dir_toward(c, goal);
+            if self.grid.blocked(add(c, step_of(dir))) != 0 {
+                wall_dir = Some(dir);
+                break;
+            }
+            let other = dir_toward_other(c, goal, dir);
+            if let Some(o) = other {
+                if self.grid.blocked(add(c, step_of(o))) != 0 {
+                    wall_dir = Some(o);
+                    break;
+                }
+            }
+            c = add(c, step_of(dir));
+            n += 1;
+        }
+        let Some(w) = wall_dir else {
+            // Stalled with no wall in sight (the reflex's margins): nothing to follow.
+            return;
+        };
+        self.hit = c;
+        self.hit_d2 = d2(c, goal);
+        self.last_hit_d2 = self.hit_d2;
+        self.bug = c;
+        // Circulate the way whose first move also approaches the goal on the other axis;
+        // odd approaches the other way.
+        let right = (w + 3) & 3; // heading with the wall on the left
+        let s = step_of(right);
+        let gain = s[0] * (goal[0] - c[0]) + s[1] * (goal[1] - c[1]);
+        let left_wall = (gain >= 0) ^ (self.approach & 1 == 1);
+        if left_wall {
+            self.side = 1;
+            self.dir = right;
+        } else {
+            self.side = 3;
+            self.dir = (w + 1) & 3;
+        }
+        self.toward_wall = 0;
+        self.left_hit = false;
+        self.prev_cross = cross(self.hit, goal, c);
+        self.sight.stop();
+        self.set_mode(Mode::Wall);
+    }
+
+    /// The free cell nearest `arm` within two cells (nearest the goal among equals).
+    fn nearest_free(&self, arm: [i32; 2], goal: [i32; 2]) -> Option<[i32; 2]> {
+        if self.grid.blocked(arm) == 0 {
+            return Some(arm);
+        }
+        let mut best: Option<[i32; 2]> = None;
+        let mut r = 1;
+        while r <= 2 {
+            let mut d2_ = -r;
+            while d2_ <= r {
+                let mut d1 = -r;
+                while d1 <= r {
+                    let c = [arm[0] + d1, arm[1] + d2_];
+                    if cheb(c, arm) == r && self.grid.blocked(c) == 0 {
+                        let better = match best {
+                            None => true,
+                            Some(b) => d2(c, goal) < d2(b, goal),
+                        };
+                        if better {
+                            best = Some(c);
+                        }
+                    }
+                    d1 += 1;
+                }
+                d2_ += 1;
+            }
+            if best.is_some() {
+                return best;
+            }
+            r += 1;
+        }
+        None
+    }
+
+    /// One wall-following cycle.
+    fn follow(&mut self, arm: [i32; 2], goal: [i32; 2], sv: ServoView) {
+        self.glue(goal);
+        // The real trajectory from the arm to the goal, a slice per cycle.
+        match self.sight.work(&self.grid) {
+            Verdict::Clear => {
+                let near = d2(arm, goal) < self.hit_d2;
+                if !self.strict_sight || near {
+                    self.sight.stop();
+                    self.set_mode(Mode::Free);
+                    return;
+                }
+                self.start_sight(sv);
+            }
+            Verdict::Blocked | Verdict::Idle => self.start_sight(sv),
+            Verdict::Running => {}
+        }
+        if self.now_us.wrapping_sub(self.mode_since_us) > WALL_LIMIT_US {
+            self.next_approach(sv.theta_urad);
+            return;
+        }
+        // The bug moves on while the arm keeps up.
+        if cheb(arm, self.bug) > LEAD_PX {
+            return;
+        }
+        if self.bug == goal {
+            self.set_mode(Mode::Free);
+            return;
+        }
+        self.advance(goal, sv.theta_urad);
+    }
+
+    fn start_sight(&mut self, sv: ServoView) {
+        if let Some(g) = self.goal_urad(sv.theta_urad) {
+            self.sight
+                .start(
+                    [urad_to_u(sv.theta_urad[0]), urad_to_u(sv.theta_urad[1])],
+                    [urad_to_u(g[0]), urad_to_u(g[1])],
+                );
+        }
+    }
+
+    /// Moves the bug one cell along the wall and applies the leave, cycle and lost tests.
+    fn advance(&mut self, goal: [i32; 2], theta: [i32; 2]) {
+        let s = self.side;
+        let order = [
+            (self.dir + s) & 3,
+            self.dir,
+            (self.dir + 4 - s) & 3,
+            (self.dir + 2) & 3,
+        ];
+        let mut moved = false;
+        let mut k = 0;
+        while k < 4 {
+            let d = order[k];
+            let c = add(self.bug, step_of(d));
+            if self.grid.blocked(c) == 0 {
+                self.toward_wall = if k == 0 { self.toward_wall + 1 } else { 0 };
+                self.dir = d;
+                self.bug = c;
+                moved = true;
+                break;
+            }
+            k += 1;
+        }
+        if !moved {
+            // Boxed in: the fill will judge the goal.
+            return;
+        }
+        if self.toward_wall >= 4 {
+            self.lost(goal);
+            return;
+        }
+        let b = self.bug;
+        if b == goal {
+            self.set_mode(Mode::Free);
+            return;
+        }
+        if cheb(b, self.hit) >= 3 {
+            self.left_hit = true;
+        }
+        // The M-line from the (glued) hit point to the goal, crossed nearer the goal.
+        let x = cross(self.hit, goal, b);
+        let crossed = (x == 0) || ((x > 0) != (self.prev_cross > 0));
+        self.prev_cross = x;
+        let ahead = dot(self.hit, goal, b) > 0;
+        if crossed && ahead && d2(b, goal) < self.hit_d2 && self.grid.blocked(toward(b, goal)) == 0
+        {
+            self.set_mode(Mode::Free);
+            return;
+        }
+        if self.left_hit && cheb(b, self.hit) <= 1 {
+            // Round the obstacle and back at the hit point: the next approach.
+            self.next_approach(theta);
+        }
+    }
+
+    /// The wall was lost (the map changed under the bug): look for it where it was felt.
+    fn lost(&mut self, goal: [i32; 2]) {
+        let wall = (self.dir + 4 - self.side) & 3;
+        let mut c = self.bug;
+        let mut n = 0;
+        while n < SEARCH_PX {
+            let next = add(c, step_of(wall));
+            if self.grid.blocked(next) != 0 {
+                self.bug = c;
+                self.toward_wall = 0;
+                self.dir = (wall + 4 - self.side) & 3;
+                return;
+            }
+            c = next;
+            n += 1;
+        }
+        let _ = goal;
+        self.set_mode(Mode::Free);
+    }
+
+    /// Keeps the hit point on the wall along the M-line (the second unbuilt fix).
+    fn glue(&mut self, goal: [i32; 2]) {
+        let h = self.hit;
+        if self.grid.blocked(h) == 0 && self.grid.blocked(toward(h, goal)) != 0 {
+            return;
+        }
+        let mut c = h;
+        let mut n = 0;
+        if self.grid.blocked(h) != 0 {
+            // Inside the wall now: back away from the goal to the first free cell.
+            while n < GLUE_PX {
+                c = toward(c, [2 * c[0] - goal[0], 2 * c[1] - goal[1]]);
+                if self.grid.blocked(c) == 0 {
+                    self.set_hit(c, goal);
+                    return;
+                }
+                n += 1;
+            }
+            return;
+        }
+        // In free space now: on toward the goal to the cell before the wall.
+        while n < GLUE_PX && c != goal {
+            let next = toward(c, goal);
+            if self.grid.blocked(next) != 0 {
+                self.set_hit(c, goal);
+                return;
+            }
+            c = next;
+            n += 1;
+        }
+    }
+
+    fn set_hit(&mut self, c: [i32; 2], goal: [i32; 2]) {
+        self.hit = c;
+        self.hit_d2 = d2(c, goal);
+        self.last_hit_d2 = self.last_hit_d2.min(self.hit_d2);
+    }
+}
+
+/// Cross product of (goal - hit) and (c - hit): which side of the M-line `c` is on.
+#[inline(always)]
+fn cross(hit: [i32; 2], goal: [i32; 2], c: [i32; 2]) -> i32 {
+    let (dx, dy) = (goal[0] - hit[0], goal[1] - hit[1]);
+    let (cx, cy) = (c[0] - hit[0], c[1] - hit[1]);
+    dx * cy - dy * cx
+}
+
+/// Dot product of (goal - hit) and (c - hit): whether `c` is ahead of the hit point.
+#[inline(always)]
+fn dot(hit: [i32; 2], goal: [i32; 2], c: [i32; 2]) -> i32 {
+    let (dx, dy) = (goal[0] - hit[0], goal[1] - hit[1]);
+    let (cx, cy) = (c[0] - hit[0], c[1] - hit[1]);
+    dx * cx + dy * cy
+}
+
+/// The direction from `c` toward `g` along the axis with more to go.
+#[inline(always)]
+fn dir_toward(c: [i32; 2], g: [i32; 2]) -> u32 {
+    let (x, y) = (g[0] - c[0], g[1] - c[1]);
+    if x.abs() >= y.abs() {
+        if x >= 0 {
+            0
+        } else {
+            2
+        }
+    } else if y >= 0 {
+        1
+    } else {
+        3
+    }
+}
+
+/// The direction toward `g` along the other axis than `dir`, if there is any way to go.
+#[inline(always)]
+fn dir_toward_other(c: [i32; 2], g: [i32; 2], dir: u32) -> Option<u32> {
+    if dir & 1 == 0 {
+        let y = g[1] - c[1];
+        (y != 0).then_some(if y > 0 { 1 } else { 3 })
+    } else {
+        let x = g[0] - c[0];
+        (x != 0).then_some(if x > 0 { 0 } else { 2 })
+    }
+}

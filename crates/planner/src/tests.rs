@@ -1,0 +1,351 @@
+//! The planner against a kinematic stand-in for the reflex and servo: the arm moves a cell
+//! per axis every few cycles toward the request, never into a marked pixel, and the stand-in
+//! flags a stall when it stays short of its request with nowhere to go.
+
+use super::*;
+use proptest::prelude::*;
+use reflex::window::SliceMap;
+
+/// A 128 x 128 map with its stripe layer.
+struct World {
+    words: Vec<u32>,
+    stripes: Vec<u32>,
+}
+
+impl World {
+    fn new() -> Self {
+        Self {
+            words: vec![0; 128 * 128],
+            stripes: vec![0; 128],
+        }
+    }
+    fn mark(&mut self, c: [i32; 2]) {
+        let i = ((c[1] & 127) * 128 + (c[0] & 127)) as usize;
+        self.words[i] = 1;
+    }
+    fn rect(&mut self, lo: [i32; 2], hi: [i32; 2]) {
+        for y in lo[1]..=hi[1] {
+            for x in lo[0]..=hi[0] {
+                self.mark([x, y]);
+            }
+        }
+    }
+    fn marked(&self, c: [i32; 2]) -> bool {
+        self.words[((c[1] & 127) * 128 + (c[0] & 127)) as usize] != 0
+            || self.stripes[(c[0] & 127) as usize] != 0
+    }
+}
+
+/// The wand position that puts the goal pose at cell `c` (elbow either way).
+fn wand_for(c: [i32; 2]) -> [i32; 2] {
+    let u = centre_urad(c);
+    let (x, y) = arm_tip(u[0] as f64 * 1e-6, u[1] as f64 * 1e-6);
+    [(x * 1e6).round() as i32, (y * 1e6).round() as i32]
+}
+
+fn arm_tip(t1: f64, t2: f64) -> (f64, f64) {
+    let l = goal::L_UM as f64 * 1e-6;
+    (l * t1.cos() + l * t2.cos(), l * t1.sin() + l * t2.sin())
+}
+
+/// What a closed-loop run did.
+#[derive(Debug)]
+struct Run {
+    arrived: bool,
+    #[allow(dead_code)]
+    cycles: u32,
+    last: Output,
+    collided: bool,
+    walls: u32,
+}
+
+/// Runs the planner with the stand-in from `start` toward the wand held for goal cell
+/// `goal` for at most `cycles` cycles (1 ms each); the arm takes `per` cycles per cell.
+fn run(w: &World, start: [i32; 2], goal_c: [i32; 2], cycles: u32) -> Run {
+    let mut p = Planner::new();
+    let mut at = start;
+    let wand = wand_for(goal_c);
+    let per = 4;
+    let mut stuck = 0;
+    let mut flags = 0;
+    let mut last = Output::default();
+    let mut walls = 0;
+    let mut prev_mode = 0;
+    for n in 0..cycles {
+        let theta = centre_urad(at);
+        let sv = ServoView {
+            theta_urad: theta,
+            omega_urad_s: [0; 2],
+            arrest_urad: theta,
+            t_us: n * 1000,
+            loops: n,
+        };
+        let inp = Input {
+            servo: Some(sv),
+            reflex_flags: Some(flags),
+            wand_um: Some(wand),
+        };
+        let mut m = SliceMap {
+            words: &w.words,
+            stripes: &w.stripes,
+        };
+        last = p.step(&inp, &mut m);
+        let md = last.mode & 0xFF;
+        if md == mode::WALL && prev_mode != mode::WALL {
+            walls += 1;
+        }
+        prev_mode = md;
+        let req = cell_of(last.request_urad);
+        if n % per == 0 {
+            let mut moved = false;
+            for ax in 0..2 {
+                let d = (req[ax] - at[ax]).signum();
+                if d != 0 {
+                    let mut next = at;
+                    next[ax] += d;
+                    if !w.marked(next) {
+                        at = next;
+                        moved = true;
+                    }
+                }
+            }
+            stuck = if moved || at == req { 0 } else { stuck + 1 };
+        }
+        flags = rf::FROM_PLANNER | if stuck > 50 { rf::STALLED } else { 0 };
+        if w.marked(at) {
+            return Run {
+                arrived: false,
+                cycles: n,
+                last,
+                collided: true,
+                walls,
+            };
+        }
+        let g = cell_of(p.goal_urad(theta).unwrap_or(theta));
+        if p.poses.is_some() && ((at[0] - g[0]) & 127, (at[1] - g[1]) & 127) == (0, 0) {
+            return Run {
+                arrived: true,
+                cycles: n,
+                last,
+                collided: false,
+                walls,
+            };
+        }
+    }
+    Run {
+        arrived: false,
+        cycles,
+        last,
+        collided: false,
+        walls,
+    }
+}
+
+#[test]
+fn free_space_goes_straight_to_the_goal() {
+    let w = World::new();
+    let r = run(&w, [10, 10], [40, 30], 20_000);
+    assert!(r.arrived, "{r:?}");
+    assert_eq!(r.walls, 0);
+}
+
+#[test]
+fn a_wall_across_the_way_is_followed_round() {
+    let mut w = World::new();
+    // A long bar across theta2 between start and goal, open at both ends.
+    w.rect([30, 0], [33, 50]);
+    // The goal's other pose (elbow the other way, cell (22, 45)) inside an obstacle.
+    w.rect([19, 42], [25, 48]);
+    let r = run(&w, [20, 20], [45, 22], 40_000);
+    assert!(r.arrived, "{r:?}");
+    assert!(!r.collided);
+    assert!(r.walls >= 1);
+}
+
+#[test]
+fn a_cup_facing_the_start_does_not_trap_the_arm() {
+    let mut w = World::new();
+    // A U open toward the start (the reflex's local minimum, fig. VI.2's setting).
+    w.rect([50, 30], [53, 70]);
+    w.rect([30, 30], [53, 33]);
+    w.rect([30, 67], [53, 70]);
+    let r = run(&w, [40, 50], [70, 50], 60_000);
+    assert!(r.arrived, "{r:?}");
+    assert!(!r.collided);
+}
+
+#[test]
+fn a_goal_inside_an_obstacle_is_reported() {
+    let mut w = World::new();
+    w.rect([60, 60], [80, 80]);
+    // Cover the elbow's other pose too: it lies elsewhere, so mark that region as well.
+    let wand = wand_for([70, 70]);
+    let poses = goal::inverse(wand[0], wand[1]);
+    let other = cell_of(poses[1]);
+    w.rect([other[0] - 4, other[1] - 4], [other[0] + 4, other[1] + 4]);
+    let other0 = cell_of(poses[0]);
+    w.rect([other0[0] - 4, other0[1] - 4], [other0[0] + 4, other0[1] + 4]);
+    let r = run(&w, [10, 10], [70, 70], 20_000);
+    assert!(!r.arrived);
+    assert_eq!(r.last.mode & 0xFF, mode::UNREACHABLE, "{r:?}");
+    assert_eq!(r.last.reason, reason::GOAL_IN_OBSTACLE);
+}
+
+#[test]
+fn an_enclosed_goal_is_reported() {
+    let mut w = World::new();
+    // Two link-1 stripes cut the torus into two bands; both goal poses lie in the far band
+    // when the band is wide enough: check which band each pose is in and build around it.
+    let wand = wand_for([70, 40]);
+    let poses = goal::inverse(wand[0], wand[1]);
+    let (a, b) = (cell_of(poses[0])[0] & 127, cell_of(poses[1])[0] & 127);
+    let (lo, hi) = (a.min(b) - 3, a.max(b) + 3);
+    assert!(hi - lo < 120, "poses {a} {b}");
+    w.stripes[(lo & 127) as usize] = 1;
+    w.stripes[(hi & 127) as usize] = 1;
+    // Start outside the band.
+    let start = [(hi + 10) & 127, 10];
+    let r = run(&w, start, [70, 40], 20_000);
+    assert!(!r.arrived);
+    assert_eq!(r.last.mode & 0xFF, mode::UNREACHABLE, "{r:?}");
+    assert_eq!(r.last.reason, reason::ENCLOSED);
+    assert!(!r.collided);
+}
+
+#[test]
+fn the_fill_finds_the_free_region() {
+    let mut w = World::new();
+    // A closed ring: inside and outside are apart.
+    w.rect([40, 40], [60, 41]);
+    w.rect([40, 59], [60, 60]);
+    w.rect([40, 40], [41, 60]);
+    w.rect([59, 40], [60, 60]);
+    let mut g = Grid::new();
+    let mut m = SliceMap {
+        words: &w.words,
+        stripes: &w.stripes,
+    };
+    g.refresh(&mut m, 128);
+    let mut f = Fill::new();
+    f.start(&g, [50, 50]);
+    let mut n = 0;
+    while f.work(&g, 16) == 0 {
+        n += 1;
+        assert!(n < 1000);
+    }
+    assert_eq!(f.reached([50, 50]), 1);
+    assert_eq!(f.reached([10, 10]), 0);
+    assert_eq!(f.reached([100, 120]), 0);
+    f.start(&g, [10, 10]);
+    while f.work(&g, 16) == 0 {}
+    assert_eq!(f.reached([50, 50]), 0);
+    // Across the torus edge.
+    assert_eq!(f.reached([127, 127]), 1);
+    assert_eq!(f.reached([0, 64]), 1);
+}
+
+#[test]
+fn the_trajectory_check_bends_like_the_servo() {
+    // Link 2 accelerates about three times faster: from rest, a move of equal distances on
+    // both axes covers theta2 first, so a block on the diagonal is missed and one on the
+    // theta2-first corner is met.
+    let mut g = Grid::new();
+    let mut w = World::new();
+    w.rect([26, 44], [28, 46]); // near the corner (from.x, to.y) side
+    let mut m = SliceMap {
+        words: &w.words,
+        stripes: &w.stripes,
+    };
+    g.refresh(&mut m, 128);
+    let mut s = Sight::new();
+    s.start([20 * 256, 20 * 256], [60 * 256, 60 * 256]);
+    let v = loop {
+        match s.work(&g) {
+            Verdict::Running => continue,
+            v => break v,
+        }
+    };
+    assert_eq!(v, Verdict::Blocked);
+    let mut w2 = World::new();
+    w2.rect([39, 39], [41, 41]); // on the straight line of sight
+    let mut g2 = Grid::new();
+    let mut m2 = SliceMap {
+        words: &w2.words,
+        stripes: &w2.stripes,
+    };
+    g2.refresh(&mut m2, 128);
+    s.start([20 * 256, 20 * 256], [60 * 256, 60 * 256]);
+    let v = loop {
+        match s.work(&g2) {
+            Verdict::Running => continue,
+            v => break v,
+        }
+    };
+    assert_eq!(v, Verdict::Clear);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+    /// Random boxes, random start and goal: when a plain breadth-first search on the same
+    /// blocked cells finds a way to either pose, the planner gets there, never through a
+    /// marked pixel; when it finds none, the planner says the goal is unreachable.
+    #[test]
+    fn reaches_every_reachable_goal(boxes in proptest::collection::vec((0i32..128, 0i32..128, 2i32..40, 2i32..40), 3..12),
+                                    s in (0i32..128, 0i32..128), gl in (0i32..128, 0i32..128)) {
+        let mut w = World::new();
+        for (x, y, a, b) in &boxes {
+            w.rect([*x, *y], [x + a, y + b]);
+        }
+        let mut g = Grid::new();
+        let mut m = SliceMap { words: &w.words, stripes: &w.stripes };
+        g.refresh(&mut m, 128);
+        let start = [s.0, s.1];
+        let goal_c = [gl.0, gl.1];
+        prop_assume!(g.blocked(start) == 0);
+        // Both poses of the goal: the planner may go for either.
+        let wand = wand_for(goal_c);
+        let poses = goal::inverse(wand[0], wand[1]);
+        let reach = bfs(&g, start);
+        let ok: Vec<bool> = poses.iter().map(|p| reach[idx(cell_of(*p))]).collect();
+        let r = run(&w, start, goal_c, 120_000);
+        prop_assert!(!r.collided);
+        if ok[0] || ok[1] {
+            prop_assert!(r.arrived, "{:?}", r);
+        } else if r.arrived {
+            // Closer than a pixel to an obstacle (the stand-in, like the reflex, goes
+            // there): only where the marked pixels leave a way.
+            let loose = bfs_by(start, |c| w.marked(c));
+            prop_assert!(poses.iter().any(|p| loose[idx(cell_of(*p))]));
+        } else {
+            prop_assert_eq!(r.last.mode & 0xFF, mode::UNREACHABLE, "{:?}", r);
+        }
+    }
+}
+
+fn idx(c: [i32; 2]) -> usize {
+    ((c[1] & 127) * 128 + (c[0] & 127)) as usize
+}
+
+/// 4-connected breadth-first search of the free cells from `s`.
+fn bfs(g: &Grid, s: [i32; 2]) -> Vec<bool> {
+    bfs_by(s, |c| g.blocked(c) != 0)
+}
+
+/// 4-connected breadth-first search from `s` of the cells `blocked` refuses.
+fn bfs_by(s: [i32; 2], blocked: impl Fn([i32; 2]) -> bool) -> Vec<bool> {
+    let mut seen = vec![false; 128 * 128];
+    let mut q = std::collections::VecDeque::new();
+    seen[idx(s)] = true;
+    q.push_back(s);
+    while let Some(c) = q.pop_front() {
+        for d in 0..4 {
+            let n = add(c, step_of(d));
+            let n = [n[0] & 127, n[1] & 127];
+            if !blocked(n) && !seen[idx(n)] {
+                seen[idx(n)] = true;
+                q.push_back(n);
+            }
+        }
+    }
+    seen
+}
