@@ -320,13 +320,20 @@ pub fn campaign(
 
 /// A scenario file that replays scene `s` (`sim-host run`).
 pub fn scenario_text(kind: Kind, seed: u64, s: &Scene) -> String {
-    let c = &s.config;
+    scenario_text_titled(
+        &format!(
+            "reflex campaign {} scene {} (campaign seed {seed})",
+            kind.name(),
+            s.index
+        ),
+        &s.config,
+    )
+}
+
+/// A scenario file for a campaign scene's configuration, named `title`.
+pub fn scenario_text_titled(title: &str, c: &Config) -> String {
     let mut t = format!(
-        "# Reflex campaign scene {} ({}, campaign seed {seed}); replays with `sim-host run`.\nname = \"reflex campaign {} scene {}\"\nduration_s = {}\nseed = {}\n\n[arm]\nstart_rad = [{:?}, {:?}]\n",
-        s.index,
-        kind.name(),
-        kind.name(),
-        s.index,
+        "# {title}; replays with `sim-host run`.\nname = \"{title}\"\nduration_s = {}\nseed = {}\n\n[arm]\nstart_rad = [{:?}, {:?}]\n",
         c.duration_s,
         c.seed,
         c.start_rad[0],

@@ -60,14 +60,19 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
-    /// Safety campaigns: `reflex` runs random scenes (1-5 disks, random start in free space
+    /// Campaigns: `reflex` runs random scenes (1-5 disks, random start in free space
     /// and wand goal) with the sensing, C-space, servo and reflex boards and the collision
     /// oracle at every plant step: `--scenes` static ones, then `--moving` ones whose disks
     /// circle the shoulder at C-space border speeds up to 30 pixels/s. Writes
     /// `<out>/static/` and `<out>/moving/` (summary.json, scenes.csv, a scenario file per
-    /// scene with a collision); exits 1 if any scene had a collision.
+    /// scene with a collision); exits 1 if any scene had a collision. `planner` runs
+    /// `--scenes` random static scenes with all five boards, each judged by an A* oracle on
+    /// the same C-space map (solvable or not, time estimate); writes summary.json,
+    /// scenes.csv, a scenario per scene with a collision or a missed goal and `--pictures`
+    /// C-space pictures with the oracle's path; exits 1 on a collision, a missed solvable
+    /// goal or an unsolvable goal not reported.
     Campaign {
-        /// What to run (reflex).
+        /// What to run (reflex, planner).
         what: String,
         /// Static scenes.
         #[arg(long, default_value_t = 2000)]
@@ -78,12 +83,15 @@ enum Cmd {
         /// Campaign seed: scene i of seed s is always the same scene.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Output directory.
-        #[arg(long, default_value = "out/campaign-reflex")]
-        out: PathBuf,
+        /// Output directory (default out/campaign-<what>).
+        #[arg(long)]
+        out: Option<PathBuf>,
         /// Threads (default: the machine's cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// `planner`: pictures of this many scenes that needed the planner.
+        #[arg(long, default_value_t = 12)]
+        pictures: usize,
     },
     /// Profile one board image on the emulated 68020: cycles per main-loop pass and the
     /// functions they go to.
@@ -197,13 +205,18 @@ fn main() -> ExitCode {
             seed,
             out,
             threads,
+            pictures,
         } => {
-            if what != "reflex" {
-                eprintln!("sim-host: campaign: unknown campaign {what:?} (known: reflex)");
-                return ExitCode::from(2);
-            }
+            let out = out.unwrap_or_else(|| PathBuf::from(format!("out/campaign-{what}")));
             let threads = threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            if what == "planner" {
+                return planner_campaign(seed, scenes, threads, pictures, &out);
+            }
+            if what != "reflex" {
+                eprintln!("sim-host: campaign: unknown campaign {what:?} (known: reflex, planner)");
+                return ExitCode::from(2);
+            }
             let mut any = false;
             for (kind, n) in [
                 (sim_host::campaign::Kind::Static, scenes),
@@ -525,6 +538,72 @@ fn main() -> ExitCode {
             } else {
                 ExitCode::FAILURE
             }
+        }
+    }
+}
+
+/// `sim-host campaign planner`.
+fn planner_campaign(
+    seed: u64,
+    n: u64,
+    threads: usize,
+    pictures: usize,
+    out: &std::path::Path,
+) -> ExitCode {
+    let bar = indicatif::ProgressBar::new(n);
+    match sim_host::planner_campaign::run_to_dir(seed, n, threads, pictures, out, &|| bar.inc(1)) {
+        Ok(s) => {
+            bar.finish_and_clear();
+            println!(
+                "planner campaign: {} scenes (seed {seed}): {} solvable, reached {} ({:.1}%), reported unreachable {}, undecided {}; marginal {} (reached {}, reported {}, undecided {}); unsolvable {} (goal in obstacle {}, enclosed {}), reported {} (slowest after {:.2} s), reached anyway {}; collisions {} in {} scenes, min clearance {:.1} mm; time to goal median {:.2} s, oracle estimate median {:.2} s, median ratio {:.2}; wall following in {} scenes, approach changes in {}; {:.0} s wall -> {}",
+                s.scenes,
+                s.solvable,
+                s.solvable_reached,
+                100.0 * s.solvable_reached as f64 / s.solvable.max(1) as f64,
+                s.solvable_reported_unreachable,
+                s.solvable_undecided,
+                s.marginal[0],
+                s.marginal[1],
+                s.marginal[2],
+                s.marginal[3],
+                s.unsolvable[0] + s.unsolvable[1],
+                s.unsolvable[0],
+                s.unsolvable[1],
+                s.unsolvable_reported,
+                s.report_time_max_s,
+                s.unsolvable_reached,
+                s.collisions,
+                s.scenes_with_collisions,
+                s.min_clearance_m * 1e3,
+                s.time_to_goal_median_s,
+                s.estimate_median_s,
+                s.ratio_median,
+                s.scenes_with_walls,
+                s.scenes_with_approach_changes,
+                s.wall_s,
+                out.display()
+            );
+            if !s.collision_scenes.is_empty() {
+                println!("  scenes with collisions: {:?}", s.collision_scenes);
+            }
+            if !s.missed_scenes.is_empty() {
+                println!(
+                    "  solvable scenes missed: {:?} (replay: sim-host run {}/scene-<i>.toml)",
+                    s.missed_scenes,
+                    out.display()
+                );
+            }
+            let unreported =
+                s.unsolvable[0] + s.unsolvable[1] - s.unsolvable_reported - s.unsolvable_reached;
+            if s.scenes_with_collisions > 0 || !s.missed_scenes.is_empty() || unreported > 0 {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e) => {
+            eprintln!("sim-host: {e}");
+            ExitCode::FAILURE
         }
     }
 }

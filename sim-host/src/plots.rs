@@ -413,6 +413,8 @@ pub struct PathPicture<'a> {
     pub exact: &'a [bool],
     /// The goal (absolute angles), if any.
     pub goal: Option<[f64; 2]>,
+    /// An oracle's path to overlay (absolute angles), or none.
+    pub oracle: &'a [[f64; 2]],
 }
 
 /// Writes a C-space picture of a run (like thesis figs. V.6-V.10 and VI.3-VI.5): the map at
@@ -467,6 +469,31 @@ pub fn cspace_path(
             series
                 .label("arm")
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 14, y)], RED.stroke_width(2)));
+        }
+    }
+    if !pic.oracle.is_empty() {
+        let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+        let mut last: Option<(f64, f64)> = None;
+        for q in pic.oracle {
+            let p = (wrap(q[0]), wrap(q[1]));
+            if let Some(l) = last {
+                if (p.0 - l.0).abs() > PI || (p.1 - l.1).abs() > PI {
+                    pieces.push(Vec::new());
+                }
+            }
+            pieces.last_mut().expect("one piece").push(p);
+            last = Some(p);
+        }
+        let col = RGBColor(0, 150, 60);
+        for (k, piece) in pieces.into_iter().enumerate() {
+            let series = c
+                .draw_series(LineSeries::new(piece, col.stroke_width(2)))
+                .map_err(err)?;
+            if k == 0 {
+                series.label("oracle (A*)").legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 14, y)], col.stroke_width(2))
+                });
+            }
         }
     }
     let dots = |want: u32, none: u32| {

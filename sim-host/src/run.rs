@@ -88,7 +88,7 @@ pub struct Summary {
 pub fn trace_header(sim: &Sim) -> String {
     let mut h = String::from(
         "t_s,theta1_rad,theta2_rad,omega1_rad_s,omega2_rad_s,motor1_rad,motor2_rad,torque1_nm,torque2_nm,current1_a,current2_a,clearance_m,\
-servo_theta1_urad,servo_theta2_urad,servo_arrest1_urad,servo_arrest2_urad,reflex_goal1_urad,reflex_goal2_urad,planner_goal1_urad,planner_goal2_urad",
+servo_theta1_urad,servo_theta2_urad,servo_arrest1_urad,servo_arrest2_urad,reflex_goal1_urad,reflex_goal2_urad,reflex_flags,planner_goal1_urad,planner_goal2_urad,planner_mode,planner_reason",
     );
     for s in sim.board_stats() {
         let _ = write!(h, ",hb_{}", s.board.name());
@@ -137,15 +137,18 @@ pub fn trace_row(sim: &mut Sim, out: &mut String) {
         .unwrap_or_default();
     let _ = write!(
         out,
-        ",{},{},{},{},{},{},{},{}",
+        ",{},{},{},{},{},{},{:#x},{},{},{:#x},{}",
         servo.theta1_urad,
         servo.theta2_urad,
         servo.arrest1_urad,
         servo.arrest2_urad,
         reflex.goal1_urad,
         reflex.goal2_urad,
+        reflex.flags,
         planner.goal1_urad,
-        planner.goal2_urad
+        planner.goal2_urad,
+        planner.mode,
+        planner.reason
     );
     for s in stats {
         let _ = write!(out, ",{}", g.read_u32(BoardSlot::of(s.board).heartbeat()));
@@ -352,6 +355,7 @@ pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> Result<S
             marked: &end.marked,
             exact: &end.exact,
             goal: end.goal,
+            oracle: &[],
         },
         &samples,
     )?;

@@ -226,7 +226,7 @@ enum Native {
     Cspace(board_cspace::Board),
     Servo(board_servo::Board),
     Reflex(Box<board_reflex::Board>),
-    Planner(board_planner::Board),
+    Planner(Box<board_planner::Board>),
 }
 
 impl Native {
@@ -235,7 +235,7 @@ impl Native {
             BoardId::Sensing => Native::Sensing(Box::new(board_sensing::Board::new())),
             BoardId::Servo => Native::Servo(board_servo::Board::new()),
             BoardId::Reflex => Native::Reflex(Box::new(board_reflex::Board::new())),
-            BoardId::Planner => Native::Planner(board_planner::Board::new()),
+            BoardId::Planner => Native::Planner(Box::new(board_planner::Board::new())),
             c => Native::Cspace(board_cspace::Board::new(c)),
         }
     }
@@ -254,7 +254,7 @@ impl Native {
             Native::Cspace(b) => b.poll(&mut &mut *g, io),
             Native::Servo(b) => b.poll(g, io),
             Native::Reflex(b) => b.poll(&mut &mut *g, io),
-            Native::Planner(b) => b.poll(g, io),
+            Native::Planner(b) => b.poll(&mut &mut *g, io),
         };
     }
 }

@@ -153,7 +153,7 @@ fn script(global: &mut [u8], n: usize) -> Vec<u32> {
         scripted_pass(
             &mut r,
             &words,
-            &mut board_reflex::BusMap(&mut ArrayBus::new(global)),
+            &mut reflex::window::BusMap(&mut ArrayBus::new(global)),
             &mut o,
         );
         if o[0] != 0 {
@@ -173,7 +173,7 @@ fn host_run(global: &mut [u8], inputs: &[u32]) -> Vec<[i32; OUT_WORDS]> {
             scripted_pass(
                 &mut r,
                 w,
-                &mut board_reflex::BusMap(&mut ArrayBus::new(global)),
+                &mut reflex::window::BusMap(&mut ArrayBus::new(global)),
                 &mut o,
             );
             o

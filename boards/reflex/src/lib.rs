@@ -14,10 +14,10 @@
 use board_shell::Shell;
 use cspace::worklist::{self, OBSTACLE_BEACONS};
 use reflex::health::{EntryView, HealthInput, Problem, ENTRIES};
-use reflex::window::Map;
+use reflex::window::BusMap;
 use reflex::{Fault, GoalInput, Input, Reflex, ServoView};
 use regs::IoBus;
-use vme_map::layout::{cspace_counter, CSPACE_SIDE, CSPACE_STRIPES};
+use vme_map::layout::CSPACE_SIDE;
 use vme_map::record::Record;
 use vme_map::records::{
     beacon_flags, beacon_index, ObjectTable, PlannerGoal, ReflexStatus, ReflexSubgoal, ServoState,
@@ -58,22 +58,6 @@ pub struct Board {
 impl Default for Board {
     fn default() -> Self {
         Self::new()
-    }
-}
-
-/// The C-space map in global RAM, read a word per pixel.
-pub struct BusMap<'a, G: GlobalBus>(pub &'a mut G);
-
-impl<G: GlobalBus> Map for BusMap<'_, G> {
-    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
-        self.0.or_words(cspace_counter(i1, i2, 0), n, 4)
-    }
-    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
-        self.0
-            .or_words(cspace_counter(i1, i2, 0), n, 4 * CSPACE_SIDE)
-    }
-    fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
-        self.0.or_words(CSPACE_STRIPES + 4 * i1, n, 4)
     }
 }
 
@@ -128,7 +112,7 @@ impl Board {
         let servo = match vme_map::SERVO_STATE.read_raw(g, &mut self.servo_w) {
             // The servo has not published yet: nothing to do.
             Ok(0) => return self.shell.end(g, BoardState::Running),
-            Ok(_) => Some(servo_view(&self.servo_w)),
+            Ok(_) => Some(ServoView::from_words(&self.servo_w)),
             Err(_) => None,
         };
         // Straight into the board's copy: a torn read leaves it mixed, but then `objects_ok`
@@ -198,18 +182,6 @@ impl Board {
             BoardState::Running
         };
         self.shell.end(g, state)
-    }
-}
-
-/// The servo state's words as the reflex uses them.
-#[inline(never)]
-fn servo_view(w: &[u32; SERVO_WORDS]) -> ServoView {
-    ServoView {
-        theta_urad: [w[0] as i32, w[1] as i32],
-        omega_urad_s: [w[2] as i32, w[3] as i32],
-        arrest_urad: [w[4] as i32, w[5] as i32],
-        t_us: w[8],
-        loops: w[9],
     }
 }
 

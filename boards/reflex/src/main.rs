@@ -42,7 +42,7 @@ pub extern "C" fn reflex_probe_run(inputs: *const u32, n: u32, out: *mut i32) ->
                 &mut *(out.add(OUT_WORDS * i as usize) as *mut [i32; OUT_WORDS]),
             )
         };
-        reflex::script::scripted_pass(r, w, &mut board_reflex::BusMap(&mut g), o);
+        reflex::script::scripted_pass(r, w, &mut reflex::window::BusMap(&mut g), o);
         i += 1;
     }
     0

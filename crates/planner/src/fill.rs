@@ -1,11 +1,14 @@
 //! Reachability (beyond the thesis, which had no test for an unreachable goal but cycling,
-//! ch. VI section 4): the set of cells the arm can reach from where it is, through cells that
-//! are not blocked ([`crate::grid`]), found by a fill of the torus in bitmap rows, a few rows
-//! per planner cycle, and started again when it settles. Each row takes what its neighbours
-//! above and below reached, keeps its free cells, and spreads along its free runs; passes go
-//! down then up the map until one changes nothing. A settled fill is the whole connected
-//! free region around the arm (4-connected, the wall follower's moves): a goal outside it
-//! cannot be reached while the map stays as it is.
+//! ch. VI section 4): the set of pixels the arm can reach from where it is through pixels
+//! the map does not mark, found by a fill of the torus in bitmap rows, a few rows per
+//! planner cycle, and started again when it settles. Each row takes what its neighbours
+//! above and below reached, keeps its free pixels, and spreads along its free runs; passes
+//! go down then up the map until one changes nothing. A settled fill is the whole connected
+//! free region around the arm (4-connected): a goal outside it cannot be reached while the
+//! map stays as it is. The fill uses the marked pixels, not the planner's wider blocked
+//! cells ([`crate::grid`]): the reflex lets the arm closer to a wall than the planner's
+//! clearance, so the arm can be where a fill of the blocked cells would not reach, and an
+//! unreachable verdict must hold for the arm wherever it is.
 
 use crate::grid::{spread, Grid, Row, SIDE, WORDS};
 
@@ -14,6 +17,9 @@ pub const ROWS_PER_CYCLE: u32 = 16;
 /// Passes after which an unsettled fill is abandoned (and started again): a free region
 /// needs one pass per turn of its most winding path; 128 x 128 random disks need < 10.
 pub const MAX_PASSES: u32 = 48;
+
+/// Farthest (Chebyshev) a fill looks for free cells to start from around the arm.
+pub const SEED_PX: i32 = 4;
 
 /// The fill's state.
 #[derive(Clone, Debug)]
@@ -24,6 +30,8 @@ pub struct Fill {
     changed: u32,
     /// Fills settled so far.
     settled: u32,
+    /// Seed cells of the fill in progress.
+    seeds: u32,
     /// Whether the last settled fill is in `last` (the working one is in `reach`).
     has_last: bool,
     last: [Row; 128],
@@ -51,6 +59,7 @@ impl Fill {
             pass: 0,
             changed: 0,
             settled: 0,
+            seeds: 0,
             has_last: false,
             last: [[0; WORDS]; 128],
         }
@@ -71,26 +80,43 @@ impl Fill {
     }
 
     /// Starts a fill from the free cells within two of `from` (the arm may have stopped
-    /// closer than a pixel to a wall).
+    /// closer than a pixel to a wall), or within [`SEED_PX`] if there are none that near.
+    /// Returns the number of seed cells: a fill without any gives no verdict.
     #[inline(never)]
-    pub fn start(&mut self, g: &Grid, from: [i32; 2]) {
+    pub fn start(&mut self, g: &Grid, from: [i32; 2]) -> u32 {
         clear(&mut self.reach);
-        let mut d2 = -2;
-        while d2 <= 2 {
-            let mut d1 = -2;
-            while d1 <= 2 {
+        let mut r = 2;
+        let mut seeds = 0;
+        while r <= SEED_PX && seeds == 0 {
+            seeds = self.seed(g, from, r);
+            r += 1;
+        }
+        self.seeds = seeds;
+        self.row = 0;
+        self.pass = 0;
+        self.changed = 0;
+        seeds
+    }
+
+    /// Seeds the free cells within `r` of `from`; returns how many.
+    #[inline(never)]
+    fn seed(&mut self, g: &Grid, from: [i32; 2], r: i32) -> u32 {
+        let mut n = 0;
+        let mut d2 = -r;
+        while d2 <= r {
+            let mut d1 = -r;
+            while d1 <= r {
                 let c = [from[0] + d1, from[1] + d2];
-                let free = g.blocked(c) ^ 1;
+                let free = g.marked(c) ^ 1;
                 let i1 = (c[0] & (SIDE - 1)) as u32;
                 let i2 = (c[1] & (SIDE - 1)) as usize;
                 self.reach[i2][(i1 >> 5) as usize] |= free << (i1 & 31);
+                n += free;
                 d1 += 1;
             }
             d2 += 1;
         }
-        self.row = 0;
-        self.pass = 0;
-        self.changed = 0;
+        n
     }
 
     /// Works `rows` rows of the fill. Returns 1 when the fill settled (or gave up) in
@@ -111,9 +137,12 @@ impl Fill {
                 self.row = 0;
                 self.pass += 1;
                 if self.changed == 0 {
-                    core::mem::swap(&mut self.reach, &mut self.last);
-                    self.has_last = true;
-                    self.settled += 1;
+                    // A fill with no seed (the arm deep in blocked cells) says nothing.
+                    if self.seeds != 0 {
+                        core::mem::swap(&mut self.reach, &mut self.last);
+                        self.has_last = true;
+                        self.settled += 1;
+                    }
                     return 1;
                 }
                 if self.pass >= MAX_PASSES {
@@ -132,10 +161,15 @@ impl Fill {
     fn update_row(&mut self, g: &Grid, r: u32) -> u32 {
         let up = ((r + 127) & 127) as usize;
         let dn = ((r + 1) & 127) as usize;
-        let b = g.blocked_row(r);
+        let b = g.marked_row(r);
         let free: Row = [!b[0], !b[1], !b[2], !b[3]];
         let mut n: Row = [0; WORDS];
-        merge(&mut n, &self.reach[r as usize], &self.reach[up], &self.reach[dn]);
+        merge(
+            &mut n,
+            &self.reach[r as usize],
+            &self.reach[up],
+            &self.reach[dn],
+        );
         spread(&mut n, &free);
         let old = &mut self.reach[r as usize];
         let diff = (n[0] ^ old[0]) | (n[1] ^ old[1]) | (n[2] ^ old[2]) | (n[3] ^ old[3]);

@@ -111,9 +111,9 @@ impl Grid {
         ((self.occ[r][w] & m) != 0) as u32
     }
 
-    /// Blocked row `r` (for the reachability fill).
-    pub fn blocked_row(&self, r: u32) -> &Row {
-        &self.blk[(r & 127) as usize]
+    /// Marked row `r` (for the reachability fill).
+    pub fn marked_row(&self, r: u32) -> &Row {
+        &self.occ[(r & 127) as usize]
     }
 
     /// Marks pixel `c` (tests and host tools that build a bitmap by hand); regrows the

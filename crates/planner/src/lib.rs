@@ -20,10 +20,10 @@
 //! * **Approaches** on the torus (section 4): a bug back at its hit point without a leave
 //!   point tries the other way round, then the goal's other images (reached by turning a link
 //!   the other way), eight approaches in all.
-//! * **Reachability** ([`fill`], beyond the thesis): a fill of the free cells from the arm
-//!   settles every ~0.1 s; a goal whose poses (elbow either way) are outside it in two fills
-//!   running is unreachable: the planner holds the arm where it is and says why (goal inside
-//!   an obstacle or enclosed). The same fill picks the pose to go for. Together with the
+//! * **Reachability** ([`fill`], beyond the thesis): a fill of the unmarked pixels from the
+//!   arm settles every ~0.1 s; a goal whose poses (elbow either way) are outside it in two
+//!   fills running is unreachable: the planner holds the arm where it is and says why (goal
+//!   inside an obstacle or enclosed). The same fill picks the pose to go for. Together with the
 //!   approaches and a time limit on wall following, no goal makes the planner loop forever.
 //!
 //! The Bug rule that makes it converge: a leave point by the M-line must be nearer the goal
@@ -51,8 +51,8 @@ use reflex::window::Map;
 use reflex::{u_to_urad, urad_to_u, ServoView};
 use sight::{Sight, Verdict};
 
-pub use vme_map::records::{planner_mode as mode, planner_reason as reason};
 use vme_map::records::reflex_flags as rf;
+pub use vme_map::records::{planner_mode as mode, planner_reason as reason};
 
 /// Angle units per pixel.
 pub const PIX_U: i32 = 256;
@@ -61,6 +61,10 @@ pub const LEAD_PX: i32 = 2;
 /// After a mode change, the reflex's flags are not acted on for this long (its stall flag
 /// belongs to the previous request).
 pub const SETTLE_US: u32 = 60_000;
+/// In free mode, no cell of progress toward the goal for this long is a stall too (the
+/// reflex's own stall flag needs the arm at rest, which an arm that backs off from a
+/// flickering wall edge and returns never is).
+pub const PROGRESS_US: u32 = 300_000;
 /// Wall following longer than this without leaving: the next approach.
 pub const WALL_LIMIT_US: u32 = 20_000_000;
 /// Cells the wall-lost search looks ahead.
@@ -150,6 +154,11 @@ pub struct Planner {
     hold_urad: [i32; 2],
     unreachable_fills: u32,
     last_request: [i32; 2],
+    /// Free mode: the nearest the arm came to the goal (squared cells), and when.
+    best_d2: i32,
+    best_since_us: u32,
+    /// A fill has been started.
+    filling: bool,
 }
 
 impl Default for Planner {
@@ -240,6 +249,9 @@ impl Planner {
             hold_urad: [0; 2],
             unreachable_fills: 0,
             last_request: [0; 2],
+            best_d2: i32::MAX,
+            best_since_us: 0,
+            filling: false,
         }
     }
 
@@ -266,6 +278,8 @@ impl Planner {
     fn set_mode(&mut self, m: Mode) {
         self.mode = m;
         self.mode_since_us = self.now_us;
+        self.best_d2 = i32::MAX;
+        self.best_since_us = self.now_us;
     }
 
     /// One planner cycle.
@@ -289,14 +303,17 @@ impl Planner {
         out.publish = true;
 
         // The reachability fill, always running.
-        if self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 || self.fill.settled() == 0 {
-            if self.fill.settled() > 0 {
+        let before = self.fill.settled();
+        if self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 {
+            if self.fill.settled() != before {
                 self.judge(arm);
             }
-            if self.fill.settled() == 0 && self.grid.sweeps() == 0 {
-                // Nothing read yet: do not settle on an empty map.
-            } else {
+            self.fill.start(&self.grid, arm);
+        } else if !self.filling {
+            // The first fill, once the whole map has been read.
+            if self.grid.sweeps() > 0 {
                 self.fill.start(&self.grid, arm);
+                self.filling = true;
             }
         }
 
@@ -327,8 +344,14 @@ impl Planner {
             Mode::Idle => {}
             Mode::Unreachable(_) => {}
             Mode::Free => {
+                let d = d2(arm, goal_c);
+                if d < self.best_d2 {
+                    self.best_d2 = d;
+                    self.best_since_us = self.now_us;
+                }
+                let no_progress = self.now_us.wrapping_sub(self.best_since_us) > PROGRESS_US;
                 let stalled = flags & rf::STALLED != 0 && flags & rf::FROM_PLANNER != 0;
-                if settled && stalled && arm != goal_c {
+                if settled && (stalled || no_progress) && arm != goal_c {
                     self.hit_wall(arm, goal_c, sv.theta_urad);
                 }
             }
@@ -369,10 +392,12 @@ impl Planner {
     /// The pose to go for: one the last settled fill reached, else the nearest.
     fn pick_pose(&self, poses: &[[i32; 2]; 2], theta: [i32; 2]) -> usize {
         let near = goal::choose(*poses, theta);
-        let first = usize::from(near != [
-            goal::nearest(poses[0][0], theta[0]),
-            goal::nearest(poses[0][1], theta[1]),
-        ]);
+        let first = usize::from(
+            near != [
+                goal::nearest(poses[0][0], theta[0]),
+                goal::nearest(poses[0][1], theta[1]),
+            ],
+        );
         let other = 1 - first;
         let r_first = self.fill.reached(cell_of(poses[first]));
         let r_other = self.fill.reached(cell_of(poses[other]));
@@ -420,6 +445,31 @@ impl Planner {
         }
     }
 
+    /// The goal's image on the other side of the arm along `axis` (the other axis's kept),
+    /// as the next approach.
+    fn flip_image(&mut self, axis: usize, theta: [i32; 2]) {
+        let (Some(g), Some(p)) = (self.goal_urad(theta), self.poses.map(|p| p[self.pose])) else {
+            return;
+        };
+        if self.approach + 1 >= APPROACHES {
+            self.hold_urad = theta;
+            self.set_mode(Mode::Unreachable(reason::CYCLED));
+            return;
+        }
+        let mut target = g;
+        target[axis] = if g[axis] >= theta[axis] {
+            g[axis] - TURN_URAD
+        } else {
+            g[axis] + TURN_URAD
+        };
+        let k = self.approach + 1;
+        self.start_approach(k, theta);
+        self.image = [
+            turns(target[0] - goal::nearest(p[0], theta[0])),
+            turns(target[1] - goal::nearest(p[1], theta[1])),
+        ];
+    }
+
     /// A settled fill: the goal reachable or not.
     fn judge(&mut self, arm: [i32; 2]) {
         let _ = arm;
@@ -429,7 +479,11 @@ impl Planner {
         if r0 == 1 || r1 == 1 {
             self.unreachable_fills = 0;
             // Go for a pose the fill reached.
-            let want = if r0 == 1 && r1 == 1 { self.pose } else { (r1 == 1) as usize };
+            let want = if r0 == 1 && r1 == 1 {
+                self.pose
+            } else {
+                (r1 == 1) as usize
+            };
             if want != self.pose {
                 self.pose = want;
                 if self.mode != Mode::Idle {
@@ -448,7 +502,7 @@ impl Planner {
             if let Mode::Unreachable(_) = self.mode {
                 return;
             }
-            let inside = self.grid.blocked(cell_of(poses[0])) & self.grid.blocked(cell_of(poses[1]));
+            let inside = self.grid.marked(cell_of(poses[0])) & self.grid.marked(cell_of(poses[1]));
             let why = if inside != 0 {
                 reason::GOAL_IN_OBSTACLE
             } else {
@@ -523,14 +577,15 @@ impl Planner {
         self.set_mode(Mode::Wall);
     }
 
-    /// The free cell nearest `arm` within two cells (nearest the goal among equals).
+    /// The free cell nearest `arm` within [`fill::SEED_PX`] cells (nearest the goal among
+    /// equals).
     fn nearest_free(&self, arm: [i32; 2], goal: [i32; 2]) -> Option<[i32; 2]> {
         if self.grid.blocked(arm) == 0 {
             return Some(arm);
         }
         let mut best: Option<[i32; 2]> = None;
         let mut r = 1;
-        while r <= 2 {
+        while r <= fill::SEED_PX {
             let mut d2_ = -r;
             while d2_ <= r {
                 let mut d1 = -r;
@@ -591,11 +646,10 @@ impl Planner {
 
     fn start_sight(&mut self, sv: ServoView) {
         if let Some(g) = self.goal_urad(sv.theta_urad) {
-            self.sight
-                .start(
-                    [urad_to_u(sv.theta_urad[0]), urad_to_u(sv.theta_urad[1])],
-                    [urad_to_u(g[0]), urad_to_u(g[1])],
-                );
+            self.sight.start(
+                [urad_to_u(sv.theta_urad[0]), urad_to_u(sv.theta_urad[1])],
+                [urad_to_u(g[0]), urad_to_u(g[1])],
+            );
         }
     }
 
@@ -648,9 +702,24 @@ impl Planner {
             self.set_mode(Mode::Free);
             return;
         }
-        if self.left_hit && cheb(b, self.hit) <= 1 {
-            // Round the obstacle and back at the hit point: the next approach.
-            self.next_approach(theta);
+        // Back at the hit point, on the torus: round the obstacle without a leave point.
+        let wrapped = [(b[0] - self.hit[0]) & 127, (b[1] - self.hit[1]) & 127];
+        let near = |d: i32| d <= 1 || d >= 127;
+        if self.left_hit && near(wrapped[0]) && near(wrapped[1]) {
+            let lap = [
+                (b[0] - self.hit[0]).abs() >= 64,
+                (b[1] - self.hit[1]).abs() >= 64,
+            ];
+            if lap[1] && !lap[0] {
+                // The wall went once round theta2: it is a band across theta1 and the goal
+                // lies beyond it; the way is round theta1 the other way.
+                self.flip_image(0, theta);
+            } else if lap[0] && !lap[1] {
+                self.flip_image(1, theta);
+            } else {
+                // Round an island (or both ways round the torus): the next approach.
+                self.next_approach(theta);
+            }
         }
     }
 
@@ -711,6 +780,20 @@ impl Planner {
         self.hit_d2 = d2(c, goal);
         self.last_hit_d2 = self.last_hit_d2.min(self.hit_d2);
     }
+}
+
+/// Whole turns in `d` (rounded), by subtraction (no divide on the 68020).
+fn turns(mut d: i32) -> i32 {
+    let mut k = 0;
+    while d > fx::trig::PI_URAD {
+        d -= TURN_URAD;
+        k += 1;
+    }
+    while d < -fx::trig::PI_URAD {
+        d += TURN_URAD;
+        k -= 1;
+    }
+    k
 }
 
 /// Cross product of (goal - hit) and (c - hit): which side of the M-line `c` is on.

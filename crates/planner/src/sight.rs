@@ -96,7 +96,10 @@ impl Sight {
         // T / T_i = sqrt(wmax / w_i), Q8, at most 64.
         let r1 = fx::div_shl(wmax, w1, 16).min(1 << 28);
         let r2 = fx::div_shl(wmax, w2, 16).min(1 << 28);
-        self.inv_r_q8 = [fx::isqrt_u32(r1 as u32) as i32, fx::isqrt_u32(r2 as u32) as i32];
+        self.inv_r_q8 = [
+            fx::isqrt_u32(r1 as u32) as i32,
+            fx::isqrt_u32(r2 as u32) as i32,
+        ];
         let px = (d1.max(d2) >> 8) + 1;
         self.n = (2 * px) as u32;
         self.step_q15 = fx::div(1 << 15, self.n as i32);

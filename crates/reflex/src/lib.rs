@@ -132,6 +132,23 @@ pub struct ServoView {
     pub loops: u32,
 }
 
+impl ServoView {
+    /// The view of the servo state record's words (`vme_map::records::ServoState`, read
+    /// raw by the boards).
+    #[inline(never)]
+    pub fn from_words(
+        w: &[u32; <vme_map::records::ServoState as vme_map::record::Record>::WORDS as usize],
+    ) -> Self {
+        ServoView {
+            theta_urad: [w[0] as i32, w[1] as i32],
+            omega_urad_s: [w[2] as i32, w[3] as i32],
+            arrest_urad: [w[4] as i32, w[5] as i32],
+            t_us: w[8],
+            loops: w[9],
+        }
+    }
+}
+
 /// Where the goal comes from this pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GoalInput {

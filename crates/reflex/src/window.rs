@@ -50,6 +50,50 @@ pub trait Map {
     }
 }
 
+/// The C-space map in global RAM (`vme_map::layout`), read a word per pixel: what the
+/// reflex and planner boards hand their logic.
+pub struct BusMap<'a, G: vme_map::GlobalBus>(pub &'a mut G);
+
+impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
+    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
+        self.0
+            .or_words(vme_map::layout::cspace_counter(i1, i2, 0), n, 4)
+    }
+    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        self.0.or_words(
+            vme_map::layout::cspace_counter(i1, i2, 0),
+            n,
+            4 * vme_map::layout::CSPACE_SIDE,
+        )
+    }
+    fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
+        self.0
+            .or_words(vme_map::layout::CSPACE_STRIPES + 4 * i1, n, 4)
+    }
+    fn row_bits(&mut self, i2: u32, i1: u32) -> u32 {
+        let base = vme_map::layout::cspace_counter(i1, i2, 0);
+        let mut bits = 0;
+        let mut k = 0;
+        while k < 32 {
+            let w = self.0.read_u32(base + 4 * k);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
+    }
+    fn stripe_bits(&mut self, i1: u32) -> u32 {
+        let base = vme_map::layout::CSPACE_STRIPES + 4 * i1;
+        let mut bits = 0;
+        let mut k = 0;
+        while k < 32 {
+            let w = self.0.read_u32(base + 4 * k);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
+    }
+}
+
 /// A map held in plain slices: 128 x 128 words (row `i2` after row `i2 - 1`) and 128
 /// stripe words. For tests and the host's tools.
 pub struct SliceMap<'a> {
