@@ -92,6 +92,10 @@ enum Cmd {
         /// `planner`: pictures of this many scenes that needed the planner.
         #[arg(long, default_value_t = 12)]
         pictures: usize,
+        /// `planner`: run only scene I of the campaign and write its picture
+        /// (`<out>/scene-I.png`).
+        #[arg(long)]
+        only: Option<u64>,
     },
     /// Profile one board image on the emulated 68020: cycles per main-loop pass and the
     /// functions they go to.
@@ -206,11 +210,29 @@ fn main() -> ExitCode {
             out,
             threads,
             pictures,
+            only,
         } => {
             let out = out.unwrap_or_else(|| PathBuf::from(format!("out/campaign-{what}")));
             let threads = threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             if what == "planner" {
+                if let Some(i) = only {
+                    if let Err(e) = std::fs::create_dir_all(&out) {
+                        eprintln!("sim-host: {}: {e}", out.display());
+                        return ExitCode::FAILURE;
+                    }
+                    return match sim_host::planner_campaign::picture(seed, i, &out) {
+                        Ok(r) => {
+                            println!("{}", serde_json::to_string(&r).expect("serializes"));
+                            println!("wrote {}", out.join(format!("scene-{i}.png")).display());
+                            ExitCode::SUCCESS
+                        }
+                        Err(e) => {
+                            eprintln!("sim-host: {e}");
+                            ExitCode::FAILURE
+                        }
+                    };
+                }
                 return planner_campaign(seed, scenes, threads, pictures, &out);
             }
             if what != "reflex" {

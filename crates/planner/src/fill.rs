@@ -18,7 +18,7 @@ pub const ROWS_PER_CYCLE: u32 = 16;
 /// needs one pass per turn of its most winding path; 128 x 128 random disks need < 10.
 pub const MAX_PASSES: u32 = 48;
 
-/// Farthest (Chebyshev) a fill looks for free cells to start from around the arm.
+/// Farthest (Chebyshev) a fill looks for unmarked pixels to start from around the arm.
 pub const SEED_PX: i32 = 4;
 
 /// The fill's state.
@@ -79,13 +79,14 @@ impl Fill {
         bit(&self.last, c)
     }
 
-    /// Starts a fill from the free cells within two of `from` (the arm may have stopped
-    /// closer than a pixel to a wall), or within [`SEED_PX`] if there are none that near.
-    /// Returns the number of seed cells: a fill without any gives no verdict.
+    /// Starts a fill from the arm's pixel `from`, or if the map marks it (its margins
+    /// reach over the arm), from the nearest ring of unmarked pixels within [`SEED_PX`]
+    /// (a wider start could jump a thin wall). Returns the number of seed pixels: a fill
+    /// without any gives no verdict.
     #[inline(never)]
     pub fn start(&mut self, g: &Grid, from: [i32; 2]) -> u32 {
         clear(&mut self.reach);
-        let mut r = 2;
+        let mut r = 0;
         let mut seeds = 0;
         while r <= SEED_PX && seeds == 0 {
             seeds = self.seed(g, from, r);

@@ -43,6 +43,7 @@ pub mod grid;
 pub mod sight;
 #[cfg(test)]
 mod tests;
+pub mod wall;
 
 use fill::Fill;
 use grid::Grid;
@@ -50,6 +51,7 @@ use reflex::goal::{self, TURN_URAD};
 use reflex::window::Map;
 use reflex::{u_to_urad, urad_to_u, ServoView};
 use sight::{Sight, Verdict};
+use wall::{d2, step_of, toward, Event, Tracer};
 
 use vme_map::records::reflex_flags as rf;
 pub use vme_map::records::{planner_mode as mode, planner_reason as reason};
@@ -67,6 +69,10 @@ pub const SETTLE_US: u32 = 60_000;
 pub const PROGRESS_US: u32 = 300_000;
 /// Wall following longer than this without leaving: the next approach.
 pub const WALL_LIMIT_US: u32 = 20_000_000;
+/// Steps each scout takes per planner cycle.
+pub const SCOUT_STEPS_PER_CYCLE: u32 = 32;
+/// Steps after which a scout that has found nothing stops (a success that took this long).
+pub const SCOUT_MAX: u32 = 2048;
 /// Cells the wall-lost search looks ahead.
 pub const SEARCH_PX: i32 = 4;
 /// Cells the hit point may slide along the M-line per cycle to stay on the wall.
@@ -143,13 +149,15 @@ pub struct Planner {
     last_hit_d2: i32,
     /// Trajectory leaves must be nearer than the hit point too.
     strict_sight: bool,
-    bug: [i32; 2],
-    dir: u32,
-    /// 1: wall on the left (positive circulation), 3: on the right.
-    side: u32,
-    toward_wall: u32,
-    left_hit: bool,
-    prev_cross: i32,
+    /// The bug that leads the arm along the wall.
+    tracer: Tracer,
+    /// The scouts that run both ways round the wall ahead of it, and what they found.
+    scout_left: Tracer,
+    scout_right: Tracer,
+    scout_result: [u32; 2],
+    scouting: bool,
+    /// The wall's direction from the hit point.
+    wall_dir: u32,
     /// Where the arm was held when the goal became unreachable.
     hold_urad: [i32; 2],
     unreachable_fills: u32,
@@ -167,26 +175,9 @@ impl Default for Planner {
     }
 }
 
-/// The four directions: +theta1, +theta2, -theta1, -theta2.
-#[inline(always)]
-fn step_of(dir: u32) -> [i32; 2] {
-    match dir & 3 {
-        0 => [1, 0],
-        1 => [0, 1],
-        2 => [-1, 0],
-        _ => [0, -1],
-    }
-}
-
 #[inline(always)]
 fn add(a: [i32; 2], b: [i32; 2]) -> [i32; 2] {
     [a[0] + b[0], a[1] + b[1]]
-}
-
-#[inline(always)]
-fn d2(a: [i32; 2], b: [i32; 2]) -> i32 {
-    let (x, y) = (a[0] - b[0], a[1] - b[1]);
-    x * x + y * y
 }
 
 #[inline(always)]
@@ -209,17 +200,6 @@ pub fn centre_urad(c: [i32; 2]) -> [i32; 2] {
     ]
 }
 
-/// One step from `c` toward `g` along the axis with more to go.
-#[inline(always)]
-fn toward(c: [i32; 2], g: [i32; 2]) -> [i32; 2] {
-    let (x, y) = (g[0] - c[0], g[1] - c[1]);
-    if x.abs() >= y.abs() {
-        [c[0] + x.signum(), c[1]]
-    } else {
-        [c[0], c[1] + y.signum()]
-    }
-}
-
 impl Planner {
     /// A fresh planner.
     pub const fn new() -> Self {
@@ -240,12 +220,12 @@ impl Planner {
             hit_d2: 0,
             last_hit_d2: i32::MAX,
             strict_sight: false,
-            bug: [0; 2],
-            dir: 0,
-            side: 1,
-            toward_wall: 0,
-            left_hit: false,
-            prev_cross: 0,
+            tracer: Tracer::IDLE,
+            scout_left: Tracer::IDLE,
+            scout_right: Tracer::IDLE,
+            scout_result: [0; 2],
+            scouting: false,
+            wall_dir: 0,
             hold_urad: [0; 2],
             unreachable_fills: 0,
             last_request: [0; 2],
@@ -306,7 +286,7 @@ impl Planner {
         let before = self.fill.settled();
         if self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 {
             if self.fill.settled() != before {
-                self.judge(arm);
+                self.judge(sv.theta_urad);
             }
             self.fill.start(&self.grid, arm);
         } else if !self.filling {
@@ -360,7 +340,7 @@ impl Planner {
 
         let (req, m, why) = match self.mode {
             Mode::Idle | Mode::Free => (goal_urad, mode::FREE, reason::NONE),
-            Mode::Wall => (centre_urad(self.bug), mode::WALL, reason::NONE),
+            Mode::Wall => (centre_urad(self.tracer.bug), mode::WALL, reason::NONE),
             Mode::Unreachable(r) => (self.hold_urad, mode::UNREACHABLE, r),
         };
         self.last_request = req;
@@ -445,34 +425,20 @@ impl Planner {
         }
     }
 
-    /// The goal's image on the other side of the arm along `axis` (the other axis's kept),
-    /// as the next approach.
-    fn flip_image(&mut self, axis: usize, theta: [i32; 2]) {
-        let (Some(g), Some(p)) = (self.goal_urad(theta), self.poses.map(|p| p[self.pose])) else {
-            return;
-        };
-        if self.approach + 1 >= APPROACHES {
+    /// The next image of the goal (its first approach), or unreachable when all were
+    /// tried.
+    fn next_image(&mut self, theta: [i32; 2]) {
+        let k = (self.approach | 1) + 1;
+        if k >= APPROACHES {
             self.hold_urad = theta;
             self.set_mode(Mode::Unreachable(reason::CYCLED));
-            return;
-        }
-        let mut target = g;
-        target[axis] = if g[axis] >= theta[axis] {
-            g[axis] - TURN_URAD
         } else {
-            g[axis] + TURN_URAD
-        };
-        let k = self.approach + 1;
-        self.start_approach(k, theta);
-        self.image = [
-            turns(target[0] - goal::nearest(p[0], theta[0])),
-            turns(target[1] - goal::nearest(p[1], theta[1])),
-        ];
+            self.start_approach(k, theta);
+        }
     }
 
     /// A settled fill: the goal reachable or not.
-    fn judge(&mut self, arm: [i32; 2]) {
-        let _ = arm;
+    fn judge(&mut self, theta: [i32; 2]) {
         let Some(poses) = self.poses else { return };
         let r0 = self.fill.reached(cell_of(poses[0]));
         let r1 = self.fill.reached(cell_of(poses[1]));
@@ -508,7 +474,7 @@ impl Planner {
             } else {
                 reason::ENCLOSED
             };
-            self.hold_urad = self.last_request;
+            self.hold_urad = theta;
             self.sight.stop();
             self.set_mode(Mode::Unreachable(why));
         }
@@ -556,25 +522,62 @@ impl Planner {
         self.hit = c;
         self.hit_d2 = d2(c, goal);
         self.last_hit_d2 = self.hit_d2;
-        self.bug = c;
-        // Circulate the way whose first move also approaches the goal on the other axis;
-        // odd approaches the other way.
-        let right = (w + 3) & 3; // heading with the wall on the left
-        let s = step_of(right);
-        let gain = s[0] * (goal[0] - c[0]) + s[1] * (goal[1] - c[1]);
-        let left_wall = (gain >= 0) ^ (self.approach & 1 == 1);
-        if left_wall {
-            self.side = 1;
-            self.dir = right;
-        } else {
-            self.side = 3;
-            self.dir = (w + 1) & 3;
-        }
-        self.toward_wall = 0;
-        self.left_hit = false;
-        self.prev_cross = cross(self.hit, goal, c);
+        self.wall_dir = w;
+        // Scout both ways round before the arm commits (module docs).
+        self.scout_left = Tracer::new(c, w, 1, c, goal);
+        self.scout_right = Tracer::new(c, w, 3, c, goal);
+        self.scout_result = [0; 2];
+        self.scouting = true;
+        self.tracer = Tracer::new(c, w, 1, c, goal);
         self.sight.stop();
         self.set_mode(Mode::Wall);
+    }
+
+    /// Runs the scouts a slice further; when both are done, starts the bug the better way
+    /// round, or gives up this image of the goal if neither way leads anywhere.
+    fn scout(&mut self, goal: [i32; 2], theta: [i32; 2]) {
+        let mut n = 0;
+        while n < SCOUT_STEPS_PER_CYCLE {
+            if self.scout_result[0] == 0 {
+                let e = self
+                    .scout_left
+                    .step(&self.grid, self.hit, self.hit_d2, goal);
+                self.scout_result[0] = verdict(e, self.scout_left.steps);
+            }
+            if self.scout_result[1] == 0 {
+                let e = self
+                    .scout_right
+                    .step(&self.grid, self.hit, self.hit_d2, goal);
+                self.scout_result[1] = verdict(e, self.scout_right.steps);
+            }
+            n += 1;
+        }
+        let [l, r] = self.scout_result;
+        // The first way to succeed wins (a success is its step count + 1, at most
+        // SCOUT_MAX + 1; a failure is u32::MAX), once it cannot be beaten.
+        let decided = (l != 0 && r != 0)
+            || (l != 0 && l != u32::MAX && l <= self.scout_right.steps + 1)
+            || (r != 0 && r != u32::MAX && r <= self.scout_left.steps + 1);
+        if !decided {
+            return;
+        }
+        self.scouting = false;
+        if l == u32::MAX && r == u32::MAX {
+            // Neither way round leaves this wall toward this image of the goal.
+            self.next_image(theta);
+            return;
+        }
+        // Odd approaches take the other way (the thesis's reversal), if it is not known to
+        // fail.
+        let mut left = l != 0 && (r == 0 || l <= r);
+        if self.approach & 1 == 1 {
+            let other_ok = if left { r != u32::MAX } else { l != u32::MAX };
+            if other_ok {
+                left = !left;
+            }
+        }
+        let side = if left { 1 } else { 3 };
+        self.tracer = Tracer::new(self.hit, self.wall_dir, side, self.hit, goal);
     }
 
     /// The free cell nearest `arm` within [`fill::SEED_PX`] cells (nearest the goal among
@@ -633,11 +636,15 @@ impl Planner {
             self.next_approach(sv.theta_urad);
             return;
         }
-        // The bug moves on while the arm keeps up.
-        if cheb(arm, self.bug) > LEAD_PX {
+        if self.scouting {
+            self.scout(goal, sv.theta_urad);
             return;
         }
-        if self.bug == goal {
+        // The bug moves on while the arm keeps up.
+        if cheb(arm, self.tracer.bug) > LEAD_PX {
+            return;
+        }
+        if self.tracer.bug == goal {
             self.set_mode(Mode::Free);
             return;
         }
@@ -653,94 +660,20 @@ impl Planner {
         }
     }
 
-    /// Moves the bug one cell along the wall and applies the leave, cycle and lost tests.
+    /// Moves the bug one cell along the wall and acts on what it found.
     fn advance(&mut self, goal: [i32; 2], theta: [i32; 2]) {
-        let s = self.side;
-        let order = [
-            (self.dir + s) & 3,
-            self.dir,
-            (self.dir + 4 - s) & 3,
-            (self.dir + 2) & 3,
-        ];
-        let mut moved = false;
-        let mut k = 0;
-        while k < 4 {
-            let d = order[k];
-            let c = add(self.bug, step_of(d));
-            if self.grid.blocked(c) == 0 {
-                self.toward_wall = if k == 0 { self.toward_wall + 1 } else { 0 };
-                self.dir = d;
-                self.bug = c;
-                moved = true;
-                break;
-            }
-            k += 1;
-        }
-        if !moved {
-            // Boxed in: the fill will judge the goal.
-            return;
-        }
-        if self.toward_wall >= 4 {
-            self.lost(goal);
-            return;
-        }
-        let b = self.bug;
-        if b == goal {
-            self.set_mode(Mode::Free);
-            return;
-        }
-        if cheb(b, self.hit) >= 3 {
-            self.left_hit = true;
-        }
-        // The M-line from the (glued) hit point to the goal, crossed nearer the goal.
-        let x = cross(self.hit, goal, b);
-        let crossed = (x == 0) || ((x > 0) != (self.prev_cross > 0));
-        self.prev_cross = x;
-        let ahead = dot(self.hit, goal, b) > 0;
-        if crossed && ahead && d2(b, goal) < self.hit_d2 && self.grid.blocked(toward(b, goal)) == 0
-        {
-            self.set_mode(Mode::Free);
-            return;
-        }
-        // Back at the hit point, on the torus: round the obstacle without a leave point.
-        let wrapped = [(b[0] - self.hit[0]) & 127, (b[1] - self.hit[1]) & 127];
-        let near = |d: i32| d <= 1 || d >= 127;
-        if self.left_hit && near(wrapped[0]) && near(wrapped[1]) {
-            let lap = [
-                (b[0] - self.hit[0]).abs() >= 64,
-                (b[1] - self.hit[1]).abs() >= 64,
-            ];
-            if lap[1] && !lap[0] {
-                // The wall went once round theta2: it is a band across theta1 and the goal
-                // lies beyond it; the way is round theta1 the other way.
-                self.flip_image(0, theta);
-            } else if lap[0] && !lap[1] {
-                self.flip_image(1, theta);
-            } else {
-                // Round an island (or both ways round the torus): the next approach.
-                self.next_approach(theta);
+        match self.tracer.step(&self.grid, self.hit, self.hit_d2, goal) {
+            Event::Moved | Event::Stuck => {}
+            Event::Leave | Event::AtGoal => self.set_mode(Mode::Free),
+            // Round the obstacle and back at the hit point: the next approach.
+            Event::Cycle => self.next_approach(theta),
+            // The map changed under the bug: look for the wall where it was felt.
+            Event::Lost => {
+                if !self.tracer.relocate(&self.grid, SEARCH_PX) {
+                    self.set_mode(Mode::Free);
+                }
             }
         }
-    }
-
-    /// The wall was lost (the map changed under the bug): look for it where it was felt.
-    fn lost(&mut self, goal: [i32; 2]) {
-        let wall = (self.dir + 4 - self.side) & 3;
-        let mut c = self.bug;
-        let mut n = 0;
-        while n < SEARCH_PX {
-            let next = add(c, step_of(wall));
-            if self.grid.blocked(next) != 0 {
-                self.bug = c;
-                self.toward_wall = 0;
-                self.dir = (wall + 4 - self.side) & 3;
-                return;
-            }
-            c = next;
-            n += 1;
-        }
-        let _ = goal;
-        self.set_mode(Mode::Free);
     }
 
     /// Keeps the hit point on the wall along the M-line (the second unbuilt fix).
@@ -782,34 +715,17 @@ impl Planner {
     }
 }
 
-/// Whole turns in `d` (rounded), by subtraction (no divide on the 68020).
-fn turns(mut d: i32) -> i32 {
-    let mut k = 0;
-    while d > fx::trig::PI_URAD {
-        d -= TURN_URAD;
-        k += 1;
-    }
-    while d < -fx::trig::PI_URAD {
-        d += TURN_URAD;
-        k -= 1;
-    }
-    k
-}
-
-/// Cross product of (goal - hit) and (c - hit): which side of the M-line `c` is on.
+/// A scout's result after an event: 0 still going, its steps + 1 on success (a leave point,
+/// the goal, the end of the wall, or [`SCOUT_MAX`] steps without an answer), `u32::MAX` on
+/// failure (back at the hit point, or boxed in).
 #[inline(always)]
-fn cross(hit: [i32; 2], goal: [i32; 2], c: [i32; 2]) -> i32 {
-    let (dx, dy) = (goal[0] - hit[0], goal[1] - hit[1]);
-    let (cx, cy) = (c[0] - hit[0], c[1] - hit[1]);
-    dx * cy - dy * cx
-}
-
-/// Dot product of (goal - hit) and (c - hit): whether `c` is ahead of the hit point.
-#[inline(always)]
-fn dot(hit: [i32; 2], goal: [i32; 2], c: [i32; 2]) -> i32 {
-    let (dx, dy) = (goal[0] - hit[0], goal[1] - hit[1]);
-    let (cx, cy) = (c[0] - hit[0], c[1] - hit[1]);
-    dx * cx + dy * cy
+fn verdict(e: Event, steps: u32) -> u32 {
+    match e {
+        Event::Leave | Event::AtGoal | Event::Lost => steps + 1,
+        Event::Cycle | Event::Stuck => u32::MAX,
+        Event::Moved if steps >= SCOUT_MAX => steps + 1,
+        Event::Moved => 0,
+    }
 }
 
 /// The direction from `c` toward `g` along the axis with more to go.

@@ -90,6 +90,14 @@ fn run(w: &World, start: [i32; 2], goal_c: [i32; 2], cycles: u32) -> Run {
             stripes: &w.stripes,
         };
         last = p.step(&inp, &mut m);
+        if std::env::var("PLANNER_TRACE").is_ok() && n % 50 == 0 {
+            eprintln!(
+                "{n} at {at:?} mode {:#x} reason {} req {:?}",
+                last.mode,
+                last.reason,
+                cell_of(last.request_urad)
+            );
+        }
         let md = last.mode & 0xFF;
         if md == mode::WALL && prev_mode != mode::WALL {
             walls += 1;
