@@ -379,13 +379,19 @@ impl Planner {
             ],
         );
         let other = 1 - first;
-        let r_first = self.fill.reached(cell_of(poses[first]));
-        let r_other = self.fill.reached(cell_of(poses[other]));
-        if r_first == 0 && r_other == 1 {
+        if self.score(poses[other]) > self.score(poses[first]) {
             other
         } else {
             first
         }
+    }
+
+    /// How good a pose is to go for: reached by the last fill (or no fill yet) counts 2,
+    /// clear of the planner's blocked cells 1.
+    fn score(&self, pose: [i32; 2]) -> u32 {
+        let c = cell_of(pose);
+        let reached = (self.fill.reached(c) != 0) as u32;
+        2 * reached + (self.grid.blocked(c) ^ 1)
     }
 
     /// Approach `k`: the goal image and the way round (module docs).
@@ -444,11 +450,12 @@ impl Planner {
         let r1 = self.fill.reached(cell_of(poses[1]));
         if r0 == 1 || r1 == 1 {
             self.unreachable_fills = 0;
-            // Go for a pose the fill reached.
-            let want = if r0 == 1 && r1 == 1 {
-                self.pose
+            // Go for a pose the fill reached, clear of blocked cells if one is.
+            let other = 1 - self.pose;
+            let want = if self.score(poses[other]) > self.score(poses[self.pose]) {
+                other
             } else {
-                (r1 == 1) as usize
+                self.pose
             };
             if want != self.pose {
                 self.pose = want;
@@ -484,6 +491,8 @@ impl Planner {
     fn hit_wall(&mut self, arm: [i32; 2], goal: [i32; 2], theta: [i32; 2]) {
         // The bug starts on the nearest free cell (the arm may stand nearer the wall).
         let Some(start) = self.nearest_free(arm, goal) else {
+            // Deep in blocked cells: nothing to follow from here.
+            self.next_approach(theta);
             return;
         };
         let d = d2(start, goal);
@@ -516,7 +525,9 @@ impl Planner {
             n += 1;
         }
         let Some(w) = wall_dir else {
-            // Stalled with no wall in sight (the reflex's margins): nothing to follow.
+            // Stalled with no wall in sight (the goal within the planner's clearance of an
+            // obstacle, where the reflex stops short): the next approach.
+            self.next_approach(theta);
             return;
         };
         self.hit = c;
