@@ -490,8 +490,13 @@ impl Reflex {
             sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
         } else {
             // An obstacle within the arm's own neighbourhood (wider among moving obstacles)
-            // must be evaded; short of that, brake.
-            let near = !window::rect_free(map, a1.own, a2.own, &mut tests);
+            // must be evaded; short of that, brake. An arm at rest whose margins meet an
+            // obstacle (it started there, or the map's edge moved by a pixel) cannot brake
+            // any further: it backs off to clearance, or would stand frozen (planner
+            // campaign seed 2 scene 4: an arm 15 mm from a disk never moved).
+            let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
+                && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
+            let near = !window::rect_free(map, a1.own, a2.own, &mut tests) || at_rest;
             if !near && window::rect_free(map, a1.core, a2.core, &mut tests) {
                 // Brake: the subgoal between the arm and its arrest point, as near the goal
                 // as that allows, so the arrest region only shrinks (a subgoal beyond the
