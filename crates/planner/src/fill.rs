@@ -32,9 +32,16 @@ pub struct Fill {
     settled: u32,
     /// Seed cells of the fill in progress.
     seeds: u32,
-    /// Whether the last settled fill is in `last` (the working one is in `reach`).
-    has_last: bool,
+    /// Whether the fill in progress goes through the planner's blocked cells (1) or the
+    /// marked pixels (0).
+    clear: u32,
+    /// Whether a fill of each kind has settled (marked, blocked).
+    has_last: [bool; 2],
+    /// The last settled fill through the marked pixels.
     last: [Row; 128],
+    /// The last settled fill through the planner's blocked cells (the arm kept a pixel from
+    /// anything marked: where the planner can lead it).
+    last_clear: [Row; 128],
 }
 
 impl Default for Fill {
@@ -60,8 +67,10 @@ impl Fill {
             changed: 0,
             settled: 0,
             seeds: 0,
-            has_last: false,
+            clear: 0,
+            has_last: [false; 2],
             last: [[0; WORDS]; 128],
+            last_clear: [[0; WORDS]; 128],
         }
     }
 
@@ -70,13 +79,27 @@ impl Fill {
         self.settled
     }
 
-    /// 1 when the last settled fill reached cell `c`, 0 when it did not, 2 when no fill
-    /// has settled yet.
+    /// 1 when the last settled fill through the marked pixels reached cell `c`, 0 when it
+    /// did not, 2 when no such fill has settled yet.
     pub fn reached(&self, c: [i32; 2]) -> u32 {
-        if !self.has_last {
+        if !self.has_last[0] {
             return 2;
         }
         bit(&self.last, c)
+    }
+
+    /// The same for the last settled fill through the planner's blocked cells.
+    pub fn reached_clear(&self, c: [i32; 2]) -> u32 {
+        if !self.has_last[1] {
+            return 2;
+        }
+        bit(&self.last_clear, c)
+    }
+
+    /// Whether the fill in progress (or the one that just settled) went through the
+    /// blocked cells.
+    pub fn is_clear(&self) -> bool {
+        self.clear != 0
     }
 
     /// Starts a fill from the arm's pixel `from`, or if the map marks it (its margins
@@ -84,8 +107,9 @@ impl Fill {
     /// (a wider start could jump a thin wall). Returns the number of seed pixels: a fill
     /// without any gives no verdict.
     #[inline(never)]
-    pub fn start(&mut self, g: &Grid, from: [i32; 2]) -> u32 {
+    pub fn start(&mut self, g: &Grid, from: [i32; 2], through_blocked: bool) -> u32 {
         clear(&mut self.reach);
+        self.clear = through_blocked as u32;
         let mut r = 0;
         let mut seeds = 0;
         while r <= SEED_PX && seeds == 0 {
@@ -108,7 +132,7 @@ impl Fill {
             let mut d1 = -r;
             while d1 <= r {
                 let c = [from[0] + d1, from[1] + d2];
-                let free = g.marked(c) ^ 1;
+                let free = (g.marked(c) | (g.blocked(c) & self.clear)) ^ 1;
                 let i1 = (c[0] & (SIDE - 1)) as u32;
                 let i2 = (c[1] & (SIDE - 1)) as usize;
                 self.reach[i2][(i1 >> 5) as usize] |= free << (i1 & 31);
@@ -140,8 +164,13 @@ impl Fill {
                 if self.changed == 0 {
                     // A fill with no seed (the arm deep in blocked cells) says nothing.
                     if self.seeds != 0 {
-                        core::mem::swap(&mut self.reach, &mut self.last);
-                        self.has_last = true;
+                        if self.clear != 0 {
+                            core::mem::swap(&mut self.reach, &mut self.last_clear);
+                            self.has_last[1] = true;
+                        } else {
+                            core::mem::swap(&mut self.reach, &mut self.last);
+                            self.has_last[0] = true;
+                        }
                         self.settled += 1;
                     }
                     return 1;
@@ -162,7 +191,11 @@ impl Fill {
     fn update_row(&mut self, g: &Grid, r: u32) -> u32 {
         let up = ((r + 127) & 127) as usize;
         let dn = ((r + 1) & 127) as usize;
-        let b = g.marked_row(r);
+        let b = if self.clear != 0 {
+            g.blocked_row(r)
+        } else {
+            g.marked_row(r)
+        };
         let free: Row = [!b[0], !b[1], !b[2], !b[3]];
         let mut n: Row = [0; WORDS];
         merge(

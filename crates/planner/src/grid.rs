@@ -111,6 +111,11 @@ impl Grid {
         ((self.occ[r][w] & m) != 0) as u32
     }
 
+    /// Blocked row `r` (for the reachability fill).
+    pub fn blocked_row(&self, r: u32) -> &Row {
+        &self.blk[(r & 127) as usize]
+    }
+
     /// Marked row `r` (for the reachability fill).
     pub fn marked_row(&self, r: u32) -> &Row {
         &self.occ[(r & 127) as usize]
@@ -160,27 +165,28 @@ fn dilate(dst: &mut Row, a: &Row, b: &Row, c: &Row) {
 }
 
 /// `r` spread along its row through the free pixels `f` (bits set where free) until it
-/// stops growing: the runs of `f` that `r` touches. The ring wraps.
+/// stops growing: the runs of `f` that `r` touches. The ring wraps. The row lives in memory
+/// between steps, so the loop carries no register copies (docs/toolchain.md, class 1).
 #[inline(never)]
 pub fn spread(r: &mut Row, f: &Row) {
-    let (f0, f1, f2, f3) = (f[0], f[1], f[2], f[3]);
-    let (mut n0, mut n1, mut n2, mut n3) = (r[0] & f0, r[1] & f1, r[2] & f2, r[3] & f3);
-    loop {
-        let m0 = (n0 | (n0 << 1) | (n3 >> 31) | (n0 >> 1) | (n1 << 31)) & f0;
-        let m1 = (n1 | (n1 << 1) | (n0 >> 31) | (n1 >> 1) | (n2 << 31)) & f1;
-        let m2 = (n2 | (n2 << 1) | (n1 >> 31) | (n2 >> 1) | (n3 << 31)) & f2;
-        let m3 = (n3 | (n3 << 1) | (n2 >> 31) | (n3 >> 1) | (n0 << 31)) & f3;
-        let diff = (m0 ^ n0) | (m1 ^ n1) | (m2 ^ n2) | (m3 ^ n3);
-        n0 = m0;
-        n1 = m1;
-        n2 = m2;
-        n3 = m3;
-        if diff == 0 {
-            break;
-        }
-    }
-    r[0] = n0;
-    r[1] = n1;
-    r[2] = n2;
-    r[3] = n3;
+    r[0] &= f[0];
+    r[1] &= f[1];
+    r[2] &= f[2];
+    r[3] &= f[3];
+    while spread_once(r, f) != 0 {}
+}
+
+/// One pixel of spreading each way; returns the bits that changed (0 when settled).
+#[inline(never)]
+fn spread_once(r: &mut Row, f: &Row) -> u32 {
+    let (n0, n1, n2, n3) = (r[0], r[1], r[2], r[3]);
+    let m0 = (n0 | (n0 << 1) | (n3 >> 31) | (n0 >> 1) | (n1 << 31)) & f[0];
+    let m1 = (n1 | (n1 << 1) | (n0 >> 31) | (n1 >> 1) | (n2 << 31)) & f[1];
+    let m2 = (n2 | (n2 << 1) | (n1 >> 31) | (n2 >> 1) | (n3 << 31)) & f[2];
+    let m3 = (n3 | (n3 << 1) | (n2 >> 31) | (n3 >> 1) | (n0 << 31)) & f[3];
+    r[0] = m0;
+    r[1] = m1;
+    r[2] = m2;
+    r[3] = m3;
+    (m0 ^ n0) | (m1 ^ n1) | (m2 ^ n2) | (m3 ^ n3)
 }

@@ -49,7 +49,7 @@ use fill::Fill;
 use grid::Grid;
 use reflex::goal::{self, TURN_URAD};
 use reflex::window::Map;
-use reflex::{u_to_urad, urad_to_u, ServoView};
+use reflex::{masks, u_to_urad, urad_to_u, ServoView};
 use sight::{Sight, Verdict};
 use wall::{d2, step_of, toward, Event, Tracer};
 
@@ -133,8 +133,9 @@ pub struct Planner {
     mode_since_us: u32,
     /// The wand position the goal was last computed from.
     wand_um: [i32; 2],
-    /// The goal's two poses (wrapped), when known.
-    poses: Option<[[i32; 2]; 2]>,
+    /// The goal's two poses (wrapped), valid when `has_goal`.
+    poses: [[i32; 2]; 2],
+    has_goal: bool,
     /// Which pose is the goal.
     pose: usize,
     /// Goal image offsets in turns per axis (the approach), and the angles they are
@@ -154,7 +155,7 @@ pub struct Planner {
     /// The scouts that run both ways round the wall ahead of it, and what they found.
     scout_left: Tracer,
     scout_right: Tracer,
-    scout_result: [u32; 2],
+    scout_result: [i32; 2],
     scouting: bool,
     /// The wall's direction from the hit point.
     wall_dir: u32,
@@ -167,6 +168,9 @@ pub struct Planner {
     best_since_us: u32,
     /// A fill has been started.
     filling: bool,
+    /// The hit point's walk along the M-line ([`Planner::glue`]) and what it found.
+    walk: [i32; 2],
+    found: [i32; 2],
 }
 
 impl Default for Planner {
@@ -211,7 +215,8 @@ impl Planner {
             now_us: 0,
             mode_since_us: 0,
             wand_um: [0; 2],
-            poses: None,
+            poses: [[0; 2]; 2],
+            has_goal: false,
             pose: 0,
             image: [0; 2],
             anchor_urad: [0; 2],
@@ -232,6 +237,8 @@ impl Planner {
             best_d2: i32::MAX,
             best_since_us: 0,
             filling: false,
+            walk: [0; 2],
+            found: [0; 2],
         }
     }
 
@@ -246,13 +253,20 @@ impl Planner {
     }
 
     /// The goal in use: the chosen pose at the approach's image (absolute micro-radians).
-    pub fn goal_urad(&self, near: [i32; 2]) -> Option<[i32; 2]> {
-        let p = self.poses?[self.pose];
-        let _ = near;
-        Some([
+    pub fn goal_urad(&self) -> Option<[i32; 2]> {
+        self.has_goal.then(|| self.target())
+    }
+
+    /// The goal in use (valid once there is one): the chosen pose at the approach's image.
+    /// Returned by value, not as an `Option` (a struct returned through a pointer broke on
+    /// the 68k: docs/toolchain.md, class 7).
+    #[inline(never)]
+    fn target(&self) -> [i32; 2] {
+        let p = self.poses[self.pose];
+        [
             goal::nearest(p[0], self.anchor_urad[0]) + self.image[0] * TURN_URAD,
             goal::nearest(p[1], self.anchor_urad[1]) + self.image[1] * TURN_URAD,
-        ])
+        ]
     }
 
     fn set_mode(&mut self, m: Mode) {
@@ -274,7 +288,7 @@ impl Planner {
         self.grid.refresh(map, grid::ROWS_PER_CYCLE);
         let Some(sv) = inp.servo else {
             // Keep publishing the last request: the reflex holds if the record stops.
-            out.publish = self.poses.is_some();
+            out.publish = self.has_goal;
             out.reason = reason::SERVO;
             return out;
         };
@@ -283,16 +297,19 @@ impl Planner {
         out.publish = true;
 
         // The reachability fill, always running.
+        // Fills alternate: through the marked pixels (the verdict), then through the
+        // blocked cells (which pose the planner can lead the arm to).
         let before = self.fill.settled();
         if self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 {
-            if self.fill.settled() != before {
+            let clear = self.fill.is_clear();
+            if self.fill.settled() != before && !clear {
                 self.judge(sv.theta_urad);
             }
-            self.fill.start(&self.grid, arm);
+            self.fill.start(&self.grid, arm, !clear);
         } else if !self.filling {
             // The first fill, once the whole map has been read.
             if self.grid.sweeps() > 0 {
-                self.fill.start(&self.grid, arm);
+                self.fill.start(&self.grid, arm, false);
                 self.filling = true;
             }
         }
@@ -301,11 +318,11 @@ impl Planner {
         if let Some(w) = inp.wand_um {
             let moved = (w[0] - self.wand_um[0]).abs() > WAND_MOVE_UM
                 || (w[1] - self.wand_um[1]).abs() > WAND_MOVE_UM;
-            if self.poses.is_none() || moved {
+            if !self.has_goal || moved {
                 self.new_goal(w, sv.theta_urad);
             }
         }
-        if self.poses.is_none() || self.grid.sweeps() == 0 {
+        if !self.has_goal || self.grid.sweeps() == 0 {
             self.last_request = sv.arrest_urad;
             out.request_urad = sv.arrest_urad;
             out.mode = mode::IDLE;
@@ -315,7 +332,7 @@ impl Planner {
         if self.mode == Mode::Idle {
             self.start_approach(0, sv.theta_urad);
         }
-        let goal_urad = self.goal_urad(sv.theta_urad).unwrap_or(sv.theta_urad);
+        let goal_urad = self.target();
         let goal_c = cell_of(goal_urad);
         let flags = inp.reflex_flags.unwrap_or(0);
         let settled = self.now_us.wrapping_sub(self.mode_since_us) > SETTLE_US;
@@ -353,16 +370,15 @@ impl Planner {
     /// A new goal from the wand: its two poses; the pose the last fill reached (nearest the
     /// arm among equals); the approach starts over if the goal moved by more than a cell.
     fn new_goal(&mut self, w: [i32; 2], theta: [i32; 2]) {
-        let old = self.goal_urad(theta).map(cell_of);
+        let had = self.has_goal;
+        let old = cell_of(self.target());
         self.wand_um = w;
         let poses = goal::inverse(w[0], w[1]);
-        self.poses = Some(poses);
+        self.poses = poses;
+        self.has_goal = true;
         self.pose = self.pick_pose(&poses, theta);
-        let new = self.goal_urad(theta).map(cell_of);
-        let jump = match (old, new) {
-            (Some(a), Some(b)) => cheb(a, b) > 1,
-            _ => true,
-        };
+        let new = cell_of(self.target());
+        let jump = !had || cheb(old, new) > 1;
         if jump && self.mode != Mode::Idle {
             // Keep the approach's image offsets relative to where the arm is now.
             self.start_approach(0, theta);
@@ -386,19 +402,20 @@ impl Planner {
         }
     }
 
-    /// How good a pose is to go for: reached by the last fill (or no fill yet) counts 2,
-    /// clear of the planner's blocked cells 1.
+    /// How good a pose is to go for: reached through the marked pixels by the last fill (or
+    /// no fill yet) counts 4, through the blocked cells 2, clear of the blocked cells 1.
     fn score(&self, pose: [i32; 2]) -> u32 {
         let c = cell_of(pose);
         let reached = (self.fill.reached(c) != 0) as u32;
-        2 * reached + (self.grid.blocked(c) ^ 1)
+        let clear = (self.fill.reached_clear(c) != 0) as u32;
+        4 * reached + 2 * clear + (self.grid.blocked(c) ^ 1)
     }
 
     /// Approach `k`: the goal image and the way round (module docs).
     fn start_approach(&mut self, k: u32, theta: [i32; 2]) {
         self.approach = k;
         self.anchor_urad = theta;
-        let p = self.poses.map(|p| p[self.pose]).unwrap_or(theta);
+        let p = self.poses[self.pose];
         let away = |i: usize| {
             let g = goal::nearest(p[i], theta[i]);
             if g >= theta[i] {
@@ -445,7 +462,10 @@ impl Planner {
 
     /// A settled fill: the goal reachable or not.
     fn judge(&mut self, theta: [i32; 2]) {
-        let Some(poses) = self.poses else { return };
+        if !self.has_goal {
+            return;
+        }
+        let poses = self.poses;
         let r0 = self.fill.reached(cell_of(poses[0]));
         let r1 = self.fill.reached(cell_of(poses[1]));
         if r0 == 1 || r1 == 1 {
@@ -514,12 +534,10 @@ impl Planner {
                 wall_dir = Some(dir);
                 break;
             }
-            let other = dir_toward_other(c, goal, dir);
-            if let Some(o) = other {
-                if self.grid.blocked(add(c, step_of(o))) != 0 {
-                    wall_dir = Some(o);
-                    break;
-                }
+            let o = dir_toward_other(c, goal, dir);
+            if o != 4 && self.grid.blocked(add(c, step_of(o))) != 0 {
+                wall_dir = Some(o);
+                break;
             }
             c = add(c, step_of(dir));
             n += 1;
@@ -563,31 +581,26 @@ impl Planner {
             }
             n += 1;
         }
+        // Results: 0 still going, steps + 1 on success, FAIL on failure. Decided once both
+        // are in; computed with sign masks, not compares and branches (docs/toolchain.md).
         let [l, r] = self.scout_result;
-        // The first way to succeed wins (a success is its step count + 1, at most
-        // SCOUT_MAX + 1; a failure is u32::MAX), once it cannot be beaten.
-        let decided = (l != 0 && r != 0)
-            || (l != 0 && l != u32::MAX && l <= self.scout_right.steps + 1)
-            || (r != 0 && r != u32::MAX && r <= self.scout_left.steps + 1);
-        if !decided {
+        let nz = |x: i32| (x | x.wrapping_neg()) >> 31;
+        if nz(l) & nz(r) == 0 {
             return;
         }
         self.scouting = false;
-        if l == u32::MAX && r == u32::MAX {
+        if l & r == FAIL {
             // Neither way round leaves this wall toward this image of the goal.
             self.next_image(theta);
             return;
         }
-        // Odd approaches take the other way (the thesis's reversal), if it is not known to
-        // fail.
-        let mut left = l != 0 && (r == 0 || l <= r);
-        if self.approach & 1 == 1 {
-            let other_ok = if left { r != u32::MAX } else { l != u32::MAX };
-            if other_ok {
-                left = !left;
-            }
-        }
-        let side = if left { 1 } else { 3 };
+        // The way that succeeds in fewer steps (left on a tie); odd approaches take the
+        // other (the thesis's reversal) unless it is known to fail.
+        let right_better = (r - l) >> 31;
+        let other = masks::pick(right_better, l, r);
+        let flip = (self.approach as i32 & 1).wrapping_neg() & nz(other ^ FAIL);
+        let right = right_better ^ flip;
+        let side = (1 + (right & 2)) as u32;
         self.tracer = Tracer::new(self.hit, self.wall_dir, side, self.hit, goal);
     }
 
@@ -663,7 +676,8 @@ impl Planner {
     }
 
     fn start_sight(&mut self, sv: ServoView) {
-        if let Some(g) = self.goal_urad(sv.theta_urad) {
+        if self.has_goal {
+            let g = self.target();
             self.sight.start(
                 [urad_to_u(sv.theta_urad[0]), urad_to_u(sv.theta_urad[1])],
                 [urad_to_u(g[0]), urad_to_u(g[1])],
@@ -690,31 +704,26 @@ impl Planner {
     /// Keeps the hit point on the wall along the M-line (the second unbuilt fix).
     fn glue(&mut self, goal: [i32; 2]) {
         let h = self.hit;
-        if self.grid.blocked(h) == 0 && self.grid.blocked(toward(h, goal)) != 0 {
+        let inside = self.grid.blocked(h);
+        if inside == 0 && self.grid.blocked(toward(h, goal)) != 0 {
             return;
         }
-        let mut c = h;
+        // Inside the wall now: back away from the goal to the first free cell; in free
+        // space: on toward the goal to the cell before the wall. The walk lives in the
+        // planner, not in a register the loop carries (docs/toolchain.md, class 1).
+        let m = (inside as i32).wrapping_neg();
+        let target = [
+            masks::pick(m, 2 * h[0] - goal[0], goal[0]),
+            masks::pick(m, 2 * h[1] - goal[1], goal[1]),
+        ];
+        self.walk = h;
         let mut n = 0;
-        if self.grid.blocked(h) != 0 {
-            // Inside the wall now: back away from the goal to the first free cell.
-            while n < GLUE_PX {
-                c = toward(c, [2 * c[0] - goal[0], 2 * c[1] - goal[1]]);
-                if self.grid.blocked(c) == 0 {
-                    self.set_hit(c, goal);
-                    return;
-                }
-                n += 1;
-            }
-            return;
-        }
-        // In free space now: on toward the goal to the cell before the wall.
-        while n < GLUE_PX && c != goal {
-            let next = toward(c, goal);
-            if self.grid.blocked(next) != 0 {
+        while n < GLUE_PX {
+            if glue_step(&self.grid, &mut self.walk, &mut self.found, target, inside) != 0 {
+                let c = self.found;
                 self.set_hit(c, goal);
                 return;
             }
-            c = next;
             n += 1;
         }
     }
@@ -726,44 +735,60 @@ impl Planner {
     }
 }
 
+/// A scout's failure.
+const FAIL: i32 = i32::MAX;
+
+/// One step of the hit point's walk along the M-line (toward `target`): returns 1 when the
+/// walk found its cell (put in `found`): the first free cell when it started `inside` the
+/// wall, else the last free one before the wall.
+#[inline(never)]
+fn glue_step(
+    g: &Grid,
+    walk: &mut [i32; 2],
+    found: &mut [i32; 2],
+    target: [i32; 2],
+    inside: u32,
+) -> u32 {
+    let next = toward(*walk, target);
+    let b = g.blocked(next);
+    let m = (inside as i32).wrapping_neg();
+    found[0] = masks::pick(m, next[0], walk[0]);
+    found[1] = masks::pick(m, next[1], walk[1]);
+    *walk = next;
+    b ^ inside
+}
+
 /// A scout's result after an event: 0 still going, its steps + 1 on success (a leave point,
-/// the goal, the end of the wall, or [`SCOUT_MAX`] steps without an answer), `u32::MAX` on
+/// the goal, the end of the wall, or [`SCOUT_MAX`] steps without an answer), [`FAIL`] on
 /// failure (back at the hit point, or boxed in).
 #[inline(always)]
-fn verdict(e: Event, steps: u32) -> u32 {
+fn verdict(e: Event, steps: u32) -> i32 {
     match e {
-        Event::Leave | Event::AtGoal | Event::Lost => steps + 1,
-        Event::Cycle | Event::Stuck => u32::MAX,
-        Event::Moved if steps >= SCOUT_MAX => steps + 1,
+        Event::Leave | Event::AtGoal | Event::Lost => steps as i32 + 1,
+        Event::Cycle | Event::Stuck => FAIL,
+        Event::Moved if steps >= SCOUT_MAX => steps as i32 + 1,
         Event::Moved => 0,
     }
 }
 
-/// The direction from `c` toward `g` along the axis with more to go.
+/// The direction from `c` toward `g` along the axis with more to go (sign masks).
 #[inline(always)]
 fn dir_toward(c: [i32; 2], g: [i32; 2]) -> u32 {
     let (x, y) = (g[0] - c[0], g[1] - c[1]);
-    if x.abs() >= y.abs() {
-        if x >= 0 {
-            0
-        } else {
-            2
-        }
-    } else if y >= 0 {
-        1
-    } else {
-        3
-    }
+    let ymajor = masks::lt(masks::abs(x), masks::abs(y));
+    let dx = (x >> 31) & 2;
+    let dy = 1 + ((y >> 31) & 2);
+    masks::pick(ymajor, dy, dx) as u32
 }
 
-/// The direction toward `g` along the other axis than `dir`, if there is any way to go.
+/// The direction toward `g` along the other axis than `dir`, or 4 if there is no way to go
+/// along it (sign masks).
 #[inline(always)]
-fn dir_toward_other(c: [i32; 2], g: [i32; 2], dir: u32) -> Option<u32> {
-    if dir & 1 == 0 {
-        let y = g[1] - c[1];
-        (y != 0).then_some(if y > 0 { 1 } else { 3 })
-    } else {
-        let x = g[0] - c[0];
-        (x != 0).then_some(if x > 0 { 0 } else { 2 })
-    }
+fn dir_toward_other(c: [i32; 2], g: [i32; 2], dir: u32) -> u32 {
+    let odd = (dir as i32 & 1).wrapping_neg();
+    // Along theta2 when `dir` is along theta1, and the other way round.
+    let v = masks::pick(odd, g[0] - c[0], g[1] - c[1]);
+    let d = masks::pick(odd, (v >> 31) & 2, 1 + ((v >> 31) & 2));
+    let nz = (v | v.wrapping_neg()) >> 31;
+    masks::pick(nz, d, 4) as u32
 }

@@ -129,8 +129,8 @@ fn run(w: &World, start: [i32; 2], goal_c: [i32; 2], cycles: u32) -> Run {
                 walls,
             };
         }
-        let g = cell_of(p.goal_urad(theta).unwrap_or(theta));
-        if p.poses.is_some() && ((at[0] - g[0]) & 127, (at[1] - g[1]) & 127) == (0, 0) {
+        let g = cell_of(p.goal_urad().unwrap_or(theta));
+        if p.has_goal && ((at[0] - g[0]) & 127, (at[1] - g[1]) & 127) == (0, 0) {
             return Run {
                 arrived: true,
                 cycles: n,
@@ -238,7 +238,7 @@ fn the_fill_finds_the_free_region() {
     };
     g.refresh(&mut m, 128);
     let mut f = Fill::new();
-    f.start(&g, [50, 50]);
+    f.start(&g, [50, 50], false);
     let mut n = 0;
     while f.work(&g, 16) == 0 {
         n += 1;
@@ -247,7 +247,7 @@ fn the_fill_finds_the_free_region() {
     assert_eq!(f.reached([50, 50]), 1);
     assert_eq!(f.reached([10, 10]), 0);
     assert_eq!(f.reached([100, 120]), 0);
-    f.start(&g, [10, 10]);
+    f.start(&g, [10, 10], false);
     while f.work(&g, 16) == 0 {}
     assert_eq!(f.reached([50, 50]), 0);
     // Across the torus edge.
@@ -364,3 +364,4 @@ fn bfs_by(s: [i32; 2], blocked: impl Fn([i32; 2]) -> bool) -> Vec<bool> {
     }
     seen
 }
+

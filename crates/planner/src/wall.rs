@@ -48,15 +48,15 @@ pub fn d2(a: [i32; 2], b: [i32; 2]) -> i32 {
     x * x + y * y
 }
 
-/// One step from `c` toward `g` along the axis with more to go.
+/// One step from `c` toward `g` along the axis with more to go (sign masks, no compare
+/// and branch: docs/toolchain.md).
 #[inline(always)]
 pub fn toward(c: [i32; 2], g: [i32; 2]) -> [i32; 2] {
+    use reflex::masks::{abs, lt, pick};
     let (x, y) = (g[0] - c[0], g[1] - c[1]);
-    if x.abs() >= y.abs() {
-        [c[0] + x.signum(), c[1]]
-    } else {
-        [c[0], c[1] + y.signum()]
-    }
+    let sign = |v: i32| (v >> 31) | ((v.wrapping_neg() as u32) >> 31) as i32;
+    let ymajor = lt(abs(x), abs(y));
+    [c[0] + pick(ymajor, 0, sign(x)), c[1] + pick(ymajor, sign(y), 0)]
 }
 
 /// Cross product of (goal - hit) and (c - hit): which side of the M-line `c` is on.
