@@ -253,6 +253,16 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
             sys.run_cycles(quarter_ms);
         }
     }
+    // The planner: an arm at rest, the wand in view, a reflex (planner_bench's records).
+    let planner = board == BoardId::Planner;
+    let mut k = 0;
+    if planner {
+        for _ in 0..800 {
+            crate::planner_bench::feed(&mut sys.global, [-1.0, 0.5], k, 0, (200, 250));
+            k += 1;
+            sys.run_cycles(quarter_ms);
+        }
+    }
     sys.run_to_first_heartbeat(0);
     let hb0 = sys.heartbeat(board);
     let b = &mut sys.boards[0];
@@ -269,6 +279,10 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
             next_feed += quarter_ms;
             if let Some(f) = feed.as_mut() {
                 f.apply(&mut ArrayBus::new(&mut sys.global));
+            }
+            if planner {
+                crate::planner_bench::feed(&mut sys.global, [-1.0, 0.5], k, 0, (200, 250));
+                k += 1;
             }
         }
     }

@@ -66,6 +66,15 @@ impl Device for IdOnly {
     }
 }
 
+/// The board-ID switch as a board's own register access (for native boards run outside
+/// the scheduler: a read the switch does not decode returns all ones, a write is dropped).
+impl regs::IoBus for IdOnly {
+    fn read16(&mut self, off: u32) -> u16 {
+        Device::read16(self, off, 0).unwrap_or(0xFFFF)
+    }
+    fn write16(&mut self, _off: u32, _val: u16) {}
+}
+
 /// What the servo board's I/O sees of one motor: its angle (referred to the link) and
 /// velocity at time `t_s`, from which the counter extrapolates to the access time.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -27,6 +27,7 @@ pub mod docs;
 pub mod emu;
 pub mod image;
 pub mod optics;
+pub mod planner_bench;
 pub mod planner_campaign;
 pub mod plant;
 pub mod plots;

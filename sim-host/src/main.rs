@@ -305,6 +305,18 @@ fn main() -> ExitCode {
                     println!("{r}");
                     ExitCode::SUCCESS
                 }
+                "planner" => {
+                    match sim_host::planner_bench::report(&default_images_dir()) {
+                        Ok(r) => {
+                            print!("{r}");
+                            ExitCode::SUCCESS
+                        }
+                        Err(e) => {
+                            eprintln!("sim-host: bench planner: {e} (build the images: cargo xtask images)");
+                            ExitCode::FAILURE
+                        }
+                    }
+                }
                 "reflex" => {
                     match sim_host::reflex_bench::report(&sim_host::boot::default_images_dir()) {
                         Ok(r) => {
@@ -577,7 +589,7 @@ fn planner_campaign(
         Ok(s) => {
             bar.finish_and_clear();
             println!(
-                "planner campaign: {} scenes (seed {seed}): {} solvable, reached {} ({:.1}%), reported unreachable {}, undecided {}; marginal {} (reached {}, reported {}, undecided {}); unsolvable {} (goal in obstacle {}, enclosed {}), reported {} (slowest after {:.2} s), reached anyway {}; collisions {} in {} scenes, min clearance {:.1} mm; time to goal median {:.2} s, oracle estimate median {:.2} s, median ratio {:.2}; wall following in {} scenes, approach changes in {}; {:.0} s wall -> {}",
+                "planner campaign: {} scenes (seed {seed}): {} solvable, reached {} ({:.1}%), reported unreachable {}, undecided {}; marginal {} (reached {}, reported {}, undecided {}); unsolvable {} (goal in obstacle {}, enclosed {}), reported {} (slowest after {:.2} s), reached anyway {}; collisions {} in {} scenes, min clearance {:.1} mm; time to goal median {:.2} s, oracle estimate median {:.2} s, median ratio {:.2}; wall following in {} scenes (time to goal median {:.2} s, estimate {:.2} s, median ratio {:.2}), approach changes in {}; {:.0} s wall -> {}",
                 s.scenes,
                 s.solvable,
                 s.solvable_reached,
@@ -601,6 +613,9 @@ fn planner_campaign(
                 s.estimate_median_s,
                 s.ratio_median,
                 s.scenes_with_walls,
+                s.walls_time_median_s,
+                s.walls_estimate_median_s,
+                s.walls_ratio_median,
                 s.scenes_with_approach_changes,
                 s.wall_s,
                 out.display()

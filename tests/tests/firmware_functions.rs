@@ -3,7 +3,7 @@
 use sim_host::emu::EmuBoard;
 use sim_host::image::Image;
 use system_tests::images_dir;
-use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+use vme_map::{ArrayBus, BoardId, GlobalBus, GLOBAL_RAM_SIZE};
 
 fn board_of(id: BoardId) -> (EmuBoard, Image, Vec<u8>) {
     let img =
@@ -123,6 +123,34 @@ fn cas_swaps_only_when_the_word_matches() {
     let (found, _) = b.call(&mut g, cas, &[addr, 7, 11], 1000).unwrap();
     assert_eq!(found, 9, "no swap: the word was 9");
     assert_eq!(u32::from_be_bytes(g[0x800..0x804].try_into().unwrap()), 9);
+}
+
+/// The planner's map reader (`__vme_nonzero_bits`, the runtime's assembly) against the
+/// host's bus, on rows of random words with runs of zeros.
+#[test]
+fn nonzero_bits_matches_the_host_bus() {
+    let (mut b, img, mut g) = board_of(BoardId::Planner);
+    let f = img
+        .symbol("__vme_nonzero_bits")
+        .expect("__vme_nonzero_bits in the planner image");
+    let mut rng = sim_host::sim::Rng::new(7);
+    for case in 0..200u32 {
+        let off = 0x1000 + 128 * case;
+        for k in 0..32u32 {
+            let v = match rng.next_u64() % 4 {
+                0 => 0,
+                1 => 1 << (rng.next_u64() % 32),
+                _ => rng.next_u64() as u32 & (rng.next_u64() as u32),
+            };
+            ArrayBus::new(&mut g).write_u32(off + 4 * k, v);
+        }
+        let want = ArrayBus::new(&mut g).nonzero_bits(off);
+        let (got, cycles) = b
+            .call(&mut g, f, &[vme_map::GLOBAL_RAM_BASE + off], 10_000)
+            .unwrap();
+        assert_eq!(got, want, "case {case}");
+        assert!(cycles < 2_000, "{cycles} cycles");
+    }
 }
 
 #[test]

@@ -12,11 +12,15 @@
 
 use crate::grid::{spread, Grid, Row, SIDE, WORDS};
 
-/// Fill rows per planner cycle.
-pub const ROWS_PER_CYCLE: u32 = 16;
+/// Fill rows worked per turn (every other planner cycle), at most.
+pub const ROWS_PER_CYCLE: u32 = 4;
+/// Rows looked at per planner cycle (at most).
+pub const SCAN_PER_CYCLE: u32 = 32;
+/// Rows of the bitmap cleared per planner cycle before a fill starts.
+pub const CLEAR_PER_CYCLE: u32 = 8;
 /// Passes after which an unsettled fill is abandoned (and started again): a free region
 /// needs one pass per turn of its most winding path; 128 x 128 random disks need < 10.
-pub const MAX_PASSES: u32 = 48;
+pub const MAX_PASSES: u32 = 256;
 
 /// Farthest (Chebyshev) a fill looks for unmarked pixels to start from around the arm.
 pub const SEED_PX: i32 = 4;
@@ -24,7 +28,12 @@ pub const SEED_PX: i32 = 4;
 /// The fill's state.
 #[derive(Clone, Debug)]
 pub struct Fill {
-    reach: [Row; 128],
+    /// Three bitmaps: the fill in progress and the last settled fill of each kind, by
+    /// index (handing a settled fill over swaps indices, not 2 KiB of rows).
+    bufs: [[Row; 128]; 3],
+    /// The fill in progress.
+    work_i: usize,
+    /// The last settled fills: through the marked pixels, through the blocked cells.
     row: u32,
     pass: u32,
     changed: u32,
@@ -32,16 +41,18 @@ pub struct Fill {
     settled: u32,
     /// Seed cells of the fill in progress.
     seeds: u32,
+    /// Where the fill in progress starts.
+    from: [i32; 2],
+    /// The next row of the work bitmap to clear (128: cleared, 129: seeded too).
+    clear_row: u32,
+    /// Rows that need work (bit `r & 31` of word `r >> 5`).
+    dirty: Row,
     /// Whether the fill in progress goes through the planner's blocked cells (1) or the
     /// marked pixels (0).
     clear: u32,
     /// Whether a fill of each kind has settled (marked, blocked).
     has_last: [bool; 2],
-    /// The last settled fill through the marked pixels.
-    last: [Row; 128],
-    /// The last settled fill through the planner's blocked cells (the arm kept a pixel from
-    /// anything marked: where the planner can lead it).
-    last_clear: [Row; 128],
+    last_i: [usize; 2],
 }
 
 impl Default for Fill {
@@ -61,16 +72,19 @@ impl Fill {
     /// No fill yet.
     pub const fn new() -> Self {
         Self {
-            reach: [[0; WORDS]; 128],
+            bufs: [[[0; WORDS]; 128]; 3],
+            work_i: 0,
             row: 0,
             pass: 0,
             changed: 0,
             settled: 0,
             seeds: 0,
+            from: [0; 2],
+            clear_row: 129,
+            dirty: [0; WORDS],
             clear: 0,
             has_last: [false; 2],
-            last: [[0; WORDS]; 128],
-            last_clear: [[0; WORDS]; 128],
+            last_i: [1, 2],
         }
     }
 
@@ -85,7 +99,7 @@ impl Fill {
         if !self.has_last[0] {
             return 2;
         }
-        bit(&self.last, c)
+        bit(&self.bufs[self.last_i[0]], c)
     }
 
     /// The same for the last settled fill through the planner's blocked cells.
@@ -93,7 +107,7 @@ impl Fill {
         if !self.has_last[1] {
             return 2;
         }
-        bit(&self.last_clear, c)
+        bit(&self.bufs[self.last_i[1]], c)
     }
 
     /// Whether the fill in progress (or the one that just settled) went through the
@@ -104,12 +118,35 @@ impl Fill {
 
     /// Starts a fill from the arm's pixel `from`, or if the map marks it (its margins
     /// reach over the arm), from the nearest ring of unmarked pixels within [`SEED_PX`]
-    /// (a wider start could jump a thin wall). Returns the number of seed pixels: a fill
-    /// without any gives no verdict.
+    /// (a wider start could jump a thin wall); through the planner's blocked cells when
+    /// `through_blocked`. A fill without seed pixels gives no verdict.
     #[inline(never)]
-    pub fn start(&mut self, g: &Grid, from: [i32; 2], through_blocked: bool) -> u32 {
-        clear(&mut self.reach);
+    pub fn start(&mut self, g: &Grid, from: [i32; 2], through_blocked: bool) {
+        let _ = g;
         self.clear = through_blocked as u32;
+        self.from = from;
+        // The bitmap is cleared a slice per call of `work` before the seeds go in (all at
+        // once it was 33,000 cycles on the 68020).
+        self.clear_row = 0;
+        self.seeds = 0;
+        self.row = 0;
+        self.pass = 0;
+        // The first pass runs whole even if it changes nothing (it did the seeds).
+        self.changed = 1;
+    }
+
+    /// Clears the next slice of the work bitmap; once it is all clear, seeds the fill.
+    #[inline(never)]
+    fn prepare(&mut self, g: &Grid) {
+        if self.clear_row < 128 {
+            let end = self.clear_row + CLEAR_PER_CYCLE;
+            clear_rows(&mut self.bufs[self.work_i], self.clear_row, end);
+            self.clear_row = end;
+            return;
+        }
+        // Cleared: the seeds, in a call of their own.
+        self.clear_row = 129;
+        let from = self.from;
         let mut r = 0;
         let mut seeds = 0;
         while r <= SEED_PX && seeds == 0 {
@@ -117,46 +154,81 @@ impl Fill {
             r += 1;
         }
         self.seeds = seeds;
-        self.row = 0;
-        self.pass = 0;
-        self.changed = 0;
-        seeds
+        // The seed rows and their neighbours need work first.
+        self.dirty = [0; WORDS];
+        let mut d = -(SEED_PX + 1);
+        while d <= SEED_PX + 1 {
+            mark(&mut self.dirty, ((from[1] + d) & (SIDE - 1)) as u32, 1);
+            d += 1;
+        }
     }
 
-    /// Seeds the free cells within `r` of `from`; returns how many.
+    /// Seeds the free cells at Chebyshev distance `r` from `from`; returns how many.
     #[inline(never)]
     fn seed(&mut self, g: &Grid, from: [i32; 2], r: i32) -> u32 {
         let mut n = 0;
         let mut d2 = -r;
         while d2 <= r {
+            // The ring at distance r only (the rings inside had no free pixel).
+            let edge = (d2 == -r || d2 == r) as i32;
+            let step = edge + (1 - edge) * (2 * r).max(1);
             let mut d1 = -r;
             while d1 <= r {
                 let c = [from[0] + d1, from[1] + d2];
                 let free = (g.marked(c) | (g.blocked(c) & self.clear)) ^ 1;
                 let i1 = (c[0] & (SIDE - 1)) as u32;
                 let i2 = (c[1] & (SIDE - 1)) as usize;
-                self.reach[i2][(i1 >> 5) as usize] |= free << (i1 & 31);
+                self.bufs[self.work_i][i2][(i1 >> 5) as usize] |= free << (i1 & 31);
                 n += free;
-                d1 += 1;
+                d1 += step;
             }
             d2 += 1;
         }
         n
     }
 
-    /// Works `rows` rows of the fill. Returns 1 when the fill settled (or gave up) in
-    /// this call: the caller starts the next one.
+    /// Works up to `rows` rows of the fill that need it (a row needs work when a neighbour
+    /// changed since it was last done), looking at no more than [`SCAN_PER_CYCLE`] rows.
+    /// Returns 1 when the fill settled (a whole pass found no row to do) or gave up in this
+    /// call: the caller starts the next one.
     #[inline(never)]
     pub fn work(&mut self, g: &Grid, rows: u32) -> u32 {
+        if self.clear_row <= 128 {
+            self.prepare(g);
+            return 0;
+        }
         let mut n = 0;
-        while n < rows {
+        let mut scanned = 0;
+        while n < rows && scanned < SCAN_PER_CYCLE {
             // Down on even passes, up on odd ones.
             let r = if self.pass & 1 == 0 {
                 self.row
             } else {
                 127 - self.row
             };
-            self.changed |= self.update_row(g, r);
+            let w = (r >> 5) as usize;
+            let bit = 1u32 << (r & 31);
+            // A word of rows with nothing to do is passed over whole (both directions stay
+            // within a word's 32 rows until they cross a multiple of 32).
+            let skip = if self.dirty[w] == 0 {
+                31 - (self.row & 31)
+            } else {
+                0
+            };
+            self.row += skip;
+            scanned += skip;
+            if self.dirty[w] & bit != 0 {
+                self.dirty[w] &= !bit;
+                let changed = self.update_row(g, r);
+                self.changed |= changed & 1;
+                // The rows above and below take what this one reached; a row that could
+                // spread further along itself is visited again.
+                mark(&mut self.dirty, (r + 127) & 127, changed & 1);
+                mark(&mut self.dirty, (r + 1) & 127, changed & 1);
+                mark(&mut self.dirty, r, changed >> 1);
+                n += 1;
+            }
+            scanned += 1;
             self.row += 1;
             if self.row == 128 {
                 self.row = 0;
@@ -164,13 +236,9 @@ impl Fill {
                 if self.changed == 0 {
                     // A fill with no seed (the arm deep in blocked cells) says nothing.
                     if self.seeds != 0 {
-                        if self.clear != 0 {
-                            core::mem::swap(&mut self.reach, &mut self.last_clear);
-                            self.has_last[1] = true;
-                        } else {
-                            core::mem::swap(&mut self.reach, &mut self.last);
-                            self.has_last[0] = true;
-                        }
+                        let k = self.clear as usize;
+                        core::mem::swap(&mut self.last_i[k], &mut self.work_i);
+                        self.has_last[k] = true;
                         self.settled += 1;
                     }
                     return 1;
@@ -180,13 +248,13 @@ impl Fill {
                 }
                 self.changed = 0;
             }
-            n += 1;
         }
         0
     }
 
     /// One row: what the rows above and below reached, its own free cells, spread along
-    /// the row. Returns 1 if the row changed.
+    /// the row ([`spread`]'s few steps). Returns bit 0 set if the row changed, bit 1 if it
+    /// would spread further.
     #[inline(never)]
     fn update_row(&mut self, g: &Grid, r: u32) -> u32 {
         let up = ((r + 127) & 127) as usize;
@@ -200,19 +268,25 @@ impl Fill {
         let mut n: Row = [0; WORDS];
         merge(
             &mut n,
-            &self.reach[r as usize],
-            &self.reach[up],
-            &self.reach[dn],
+            &self.bufs[self.work_i][r as usize],
+            &self.bufs[self.work_i][up],
+            &self.bufs[self.work_i][dn],
         );
-        spread(&mut n, &free);
-        let old = &mut self.reach[r as usize];
+        let more = spread(&mut n, &free);
+        let old = &mut self.bufs[self.work_i][r as usize];
         let diff = (n[0] ^ old[0]) | (n[1] ^ old[1]) | (n[2] ^ old[2]) | (n[3] ^ old[3]);
         old[0] = n[0];
         old[1] = n[1];
         old[2] = n[2];
         old[3] = n[3];
-        (diff != 0) as u32
+        ((diff != 0) as u32) | (more << 1)
     }
+}
+
+/// Sets row `r`'s bit in `dirty` when `on` is 1.
+#[inline(always)]
+fn mark(dirty: &mut Row, r: u32, on: u32) {
+    dirty[(r >> 5) as usize] |= on << (r & 31);
 }
 
 /// `n` = `a` | `b` | `c`.
@@ -224,12 +298,16 @@ fn merge(n: &mut Row, a: &Row, b: &Row, c: &Row) {
     n[3] = a[3] | b[3] | c[3];
 }
 
-/// Clears a bitmap.
+/// Clears rows `from .. to` of a bitmap.
 #[inline(never)]
-fn clear(rows: &mut [Row; 128]) {
-    let mut r = 0;
-    while r < 128 {
-        rows[r] = [0; WORDS];
+fn clear_rows(rows: &mut [Row; 128], from: u32, to: u32) {
+    let mut r = from as usize;
+    while r < to as usize {
+        let row = &mut rows[r];
+        row[0] = 0;
+        row[1] = 0;
+        row[2] = 0;
+        row[3] = 0;
         r += 1;
     }
 }

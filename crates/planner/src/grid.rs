@@ -16,8 +16,8 @@ pub const WORDS: usize = 4;
 /// One bitmap row.
 pub type Row = [u32; WORDS];
 
-/// Map rows read per planner cycle: a whole refresh every 128 / 4 = 32 cycles.
-pub const ROWS_PER_CYCLE: u32 = 4;
+/// Map rows read per turn (every other planner cycle): a whole refresh every 128 cycles.
+pub const ROWS_PER_CYCLE: u32 = 2;
 
 /// The bitmaps.
 #[derive(Clone, Debug)]
@@ -66,7 +66,7 @@ impl Grid {
     }
 
     /// Reads the next `rows` rows of the map (and the stripes at row 0) and regrows the
-    /// blocked rows they touch.
+    /// blocked row above each (whose neighbours are then both read).
     #[inline(never)]
     pub fn refresh<M: Map + ?Sized>(&mut self, map: &mut M, rows: u32) {
         let mut n = 0;
@@ -76,9 +76,9 @@ impl Grid {
                 read_stripes(&mut self.stripes, map);
             }
             read_row(&mut self.occ[r as usize], &self.stripes, map, r);
+            // Row r - 1 now has both neighbours read this sweep (row r is regrown when
+            // row r + 1 is read: a row's lag behind the map is one more row read).
             self.grow_row((r + 127) & 127);
-            self.grow_row(r);
-            self.grow_row((r + 1) & 127);
             self.next_row = (r + 1) & 127;
             self.sweeps += (self.next_row == 0) as u32;
             n += 1;
@@ -99,7 +99,7 @@ impl Grid {
     }
 
     /// 1 when cell `c` is blocked (a marked pixel within one pixel), else 0.
-    #[inline(never)]
+    #[inline(always)]
     pub fn blocked(&self, c: [i32; 2]) -> u32 {
         let (r, w, m) = at(c);
         ((self.blk[r][w] & m) != 0) as u32
@@ -164,16 +164,27 @@ fn dilate(dst: &mut Row, a: &Row, b: &Row, c: &Row) {
     dst[3] = v3 | (v3 << 1) | (v2 >> 31) | (v3 >> 1) | (v0 << 31);
 }
 
-/// `r` spread along its row through the free pixels `f` (bits set where free) until it
-/// stops growing: the runs of `f` that `r` touches. The ring wraps. The row lives in memory
-/// between steps, so the loop carries no register copies (docs/toolchain.md, class 1).
+/// Pixels a row spreads each way per visit of the fill, at most ([`spread`]).
+pub const SPREAD_STEPS: u32 = 4;
+
+/// `r` spread along its row through the free pixels `f` (bits set where free) by up to
+/// [`SPREAD_STEPS`] pixels each way (the ring wraps). Returns 1 if it would spread further:
+/// the fill visits the row again (a row spread to the end in one visit cost up to 64 steps,
+/// 34,000 cycles on the 68020). The row lives in memory between steps, so the loop carries
+/// no register copies (docs/toolchain.md, class 1).
 #[inline(never)]
-pub fn spread(r: &mut Row, f: &Row) {
+pub fn spread(r: &mut Row, f: &Row) -> u32 {
     r[0] &= f[0];
     r[1] &= f[1];
     r[2] &= f[2];
     r[3] &= f[3];
-    while spread_once(r, f) != 0 {}
+    let mut k = 0;
+    let mut more = 1;
+    while k < SPREAD_STEPS && more != 0 {
+        more = (spread_once(r, f) != 0) as u32;
+        k += 1;
+    }
+    more
 }
 
 /// One pixel of spreading each way; returns the bits that changed (0 when settled).

@@ -18,8 +18,10 @@
 //!   the M-line to the last free cell before the wall, so that moving obstacles and sensor
 //!   noise do not leave it in free space (never revisited) or inside the obstacle.
 //! * **Approaches** on the torus (section 4): a bug back at its hit point without a leave
-//!   point tries the other way round, then the goal's other images (reached by turning a link
-//!   the other way), eight approaches in all.
+//!   point tries the other way round, then the goal's other pose (elbow the other way) if it
+//!   is as reachable, then the goal's other images (reached by turning a link the other way):
+//!   sixteen approaches in all. Before the arm commits to a way round, two scouts run both
+//!   ways along the wall on the bitmap ([`wall`]); an image no way round leads to is skipped.
 //! * **Reachability** ([`fill`], beyond the thesis): a fill of the unmarked pixels from the
 //!   arm settles every ~0.1 s; a goal whose poses (elbow either way) are outside it in two
 //!   fills running is unreachable: the planner holds the arm where it is and says why (goal
@@ -70,7 +72,7 @@ pub const PROGRESS_US: u32 = 300_000;
 /// Wall following longer than this without leaving: the next approach.
 pub const WALL_LIMIT_US: u32 = 20_000_000;
 /// Steps each scout takes per planner cycle.
-pub const SCOUT_STEPS_PER_CYCLE: u32 = 32;
+pub const SCOUT_STEPS_PER_CYCLE: u32 = 4;
 /// Steps after which a scout that has found nothing stops (a success that took this long).
 pub const SCOUT_MAX: u32 = 2048;
 /// Cells the wall-lost search looks ahead.
@@ -79,9 +81,9 @@ pub const SEARCH_PX: i32 = 4;
 pub const GLUE_PX: i32 = 4;
 /// The wand must move this far (either axis, micrometres) for the goal to be recomputed.
 pub const WAND_MOVE_UM: i32 = reflex::WAND_MOVE_UM;
-/// Approaches before the goal is given up as unreachable (two ways round each of four
-/// images of the goal on the torus).
-pub const APPROACHES: u32 = 8;
+/// Approaches before the goal is given up as unreachable (two ways round, for each of the
+/// goal's two poses, at each of four images on the torus).
+pub const APPROACHES: u32 = 16;
 /// Settled fills in a row that must agree the goal is out of reach.
 pub const UNREACHABLE_FILLS: u32 = 2;
 
@@ -138,6 +140,8 @@ pub struct Planner {
     has_goal: bool,
     /// Which pose is the goal.
     pose: usize,
+    /// The pose the approaches start from (the better, or the nearer of equals).
+    base_pose: usize,
     /// Goal image offsets in turns per axis (the approach), and the angles they are
     /// relative to.
     image: [i32; 2],
@@ -168,6 +172,8 @@ pub struct Planner {
     best_since_us: u32,
     /// A fill has been started.
     filling: bool,
+    /// Which background job this cycle does (map rows or the fill).
+    tick: u32,
     /// The hit point's walk along the M-line ([`Planner::glue`]) and what it found.
     walk: [i32; 2],
     found: [i32; 2],
@@ -218,6 +224,7 @@ impl Planner {
             poses: [[0; 2]; 2],
             has_goal: false,
             pose: 0,
+            base_pose: 0,
             image: [0; 2],
             anchor_urad: [0; 2],
             approach: 0,
@@ -237,6 +244,7 @@ impl Planner {
             best_d2: i32::MAX,
             best_since_us: 0,
             filling: false,
+            tick: 0,
             walk: [0; 2],
             found: [0; 2],
         }
@@ -285,7 +293,13 @@ impl Planner {
             reason: reason::NONE,
             publish: false,
         };
-        self.grid.refresh(map, grid::ROWS_PER_CYCLE);
+        // The background work takes turns, a cycle each: reading the map into the bitmap,
+        // then the reachability fill (together they were more than a 1 ms cycle on the
+        // 68020).
+        self.tick ^= 1;
+        if self.tick != 0 {
+            self.grid.refresh(map, grid::ROWS_PER_CYCLE);
+        }
         let Some(sv) = inp.servo else {
             // Keep publishing the last request: the reflex holds if the record stops.
             out.publish = self.has_goal;
@@ -300,7 +314,7 @@ impl Planner {
         // Fills alternate: through the marked pixels (the verdict), then through the
         // blocked cells (which pose the planner can lead the arm to).
         let before = self.fill.settled();
-        if self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 {
+        if self.tick == 0 && self.fill.work(&self.grid, fill::ROWS_PER_CYCLE) != 0 {
             let clear = self.fill.is_clear();
             if self.fill.settled() != before && !clear {
                 self.judge(sv.theta_urad);
@@ -376,7 +390,8 @@ impl Planner {
         let poses = goal::inverse(w[0], w[1]);
         self.poses = poses;
         self.has_goal = true;
-        self.pose = self.pick_pose(&poses, theta);
+        self.base_pose = self.pick_pose(&poses, theta);
+        self.pose = self.base_pose;
         let new = cell_of(self.target());
         let jump = !had || cheb(old, new) > 1;
         if jump && self.mode != Mode::Idle {
@@ -415,6 +430,8 @@ impl Planner {
     fn start_approach(&mut self, k: u32, theta: [i32; 2]) {
         self.approach = k;
         self.anchor_urad = theta;
+        // Odd pairs of approaches go for the goal's other pose (elbow the other way).
+        self.pose = self.base_pose ^ ((k >> 1) & 1) as usize;
         let p = self.poses[self.pose];
         let away = |i: usize| {
             let g = goal::nearest(p[i], theta[i]);
@@ -424,7 +441,7 @@ impl Planner {
                 1
             }
         };
-        let img = k >> 1;
+        let img = k >> 2;
         self.image = match img {
             0 => [0, 0],
             1 => [away(0), away(1)],
@@ -439,11 +456,25 @@ impl Planner {
 
     /// The next approach, or unreachable when all were tried.
     fn next_approach(&mut self, theta: [i32; 2]) {
-        if self.approach + 1 >= APPROACHES {
+        let k = self.approach + 1;
+        self.try_approach(k, theta);
+    }
+
+    /// Approach `k` or the first after it worth trying (the other pose only if it is as
+    /// good), or unreachable when all were tried.
+    fn try_approach(&mut self, mut k: u32, theta: [i32; 2]) {
+        let other = 1 - self.base_pose;
+        let worse = masks::lt(
+            self.score(self.poses[other]) as i32,
+            self.score(self.poses[self.base_pose]) as i32,
+        );
+        // An approach to the other pose when it is worse: on to the next image's first.
+        let skip = worse & (((k >> 1) & 1) as i32).wrapping_neg();
+        k = masks::pick(skip, ((k | 3) + 1) as i32, k as i32) as u32;
+        if k >= APPROACHES {
             self.hold_urad = theta;
             self.set_mode(Mode::Unreachable(reason::CYCLED));
         } else {
-            let k = self.approach + 1;
             self.start_approach(k, theta);
         }
     }
@@ -452,12 +483,7 @@ impl Planner {
     /// tried.
     fn next_image(&mut self, theta: [i32; 2]) {
         let k = (self.approach | 1) + 1;
-        if k >= APPROACHES {
-            self.hold_urad = theta;
-            self.set_mode(Mode::Unreachable(reason::CYCLED));
-        } else {
-            self.start_approach(k, theta);
-        }
+        self.try_approach(k, theta);
     }
 
     /// A settled fill: the goal reachable or not.
@@ -471,14 +497,14 @@ impl Planner {
         if r0 == 1 || r1 == 1 {
             self.unreachable_fills = 0;
             // Go for a pose the fill reached, clear of blocked cells if one is.
-            let other = 1 - self.pose;
-            let want = if self.score(poses[other]) > self.score(poses[self.pose]) {
+            let other = 1 - self.base_pose;
+            let want = if self.score(poses[other]) > self.score(poses[self.base_pose]) {
                 other
             } else {
-                self.pose
+                self.base_pose
             };
-            if want != self.pose {
-                self.pose = want;
+            if want != self.base_pose {
+                self.base_pose = want;
                 if self.mode != Mode::Idle {
                     let theta = self.anchor_urad;
                     self.start_approach(0, theta);
@@ -641,6 +667,12 @@ impl Planner {
 
     /// One wall-following cycle.
     fn follow(&mut self, arm: [i32; 2], goal: [i32; 2], sv: ServoView) {
+        if self.scouting {
+            // The arm waits at the hit point while the scouts run (the trajectory check
+            // waits too: both in one cycle were over 50,000 cycles on the 68020).
+            self.scout(goal, sv.theta_urad);
+            return;
+        }
         self.glue(goal);
         // The real trajectory from the arm to the goal, a slice per cycle.
         match self.sight.work(&self.grid) {
@@ -653,15 +685,17 @@ impl Planner {
                 }
                 self.start_sight(sv);
             }
-            Verdict::Blocked | Verdict::Idle => self.start_sight(sv),
+            // Started again on a cycle without the fill's turn (its square roots and
+            // divides are a tenth of a cycle).
+            Verdict::Blocked | Verdict::Idle => {
+                if self.tick != 0 {
+                    self.start_sight(sv);
+                }
+            }
             Verdict::Running => {}
         }
         if self.now_us.wrapping_sub(self.mode_since_us) > WALL_LIMIT_US {
             self.next_approach(sv.theta_urad);
-            return;
-        }
-        if self.scouting {
-            self.scout(goal, sv.theta_urad);
             return;
         }
         // The bug moves on while the arm keeps up.
@@ -761,14 +795,25 @@ fn glue_step(
 /// A scout's result after an event: 0 still going, its steps + 1 on success (a leave point,
 /// the goal, the end of the wall, or [`SCOUT_MAX`] steps without an answer), [`FAIL`] on
 /// failure (back at the hit point, or boxed in).
-#[inline(always)]
+/// (Sign masks over the event's code, not a match: the match's bit tests drew a
+/// condition-code clobber on the 68k, docs/toolchain.md.)
+#[inline(never)]
 fn verdict(e: Event, steps: u32) -> i32 {
-    match e {
-        Event::Leave | Event::AtGoal | Event::Lost => steps as i32 + 1,
-        Event::Cycle | Event::Stuck => FAIL,
-        Event::Moved if steps >= SCOUT_MAX => steps as i32 + 1,
-        Event::Moved => 0,
-    }
+    let code = e as u32;
+    // Success: Leave, AtGoal, Lost; failure: Cycle, Stuck (wall::Event's order).
+    const SUCCESS: u32 =
+        (1 << Event::Leave as u32) | (1 << Event::AtGoal as u32) | (1 << Event::Lost as u32);
+    const FAILURE: u32 = (1 << Event::Cycle as u32) | (1 << Event::Stuck as u32);
+    let success = ((SUCCESS >> code) & 1) as i32;
+    let failure = ((FAILURE >> code) & 1) as i32;
+    let moved = ((1u32 << Event::Moved as u32 >> code) & 1) as i32;
+    let over = ((SCOUT_MAX as i32 - 1 - steps as i32) >> 31) & 1;
+    let done = (success | (moved & over)).wrapping_neg();
+    masks::pick(
+        done,
+        steps as i32 + 1,
+        masks::pick(failure.wrapping_neg(), FAIL, 0),
+    )
 }
 
 /// The direction from `c` toward `g` along the axis with more to go (sign masks).

@@ -10,7 +10,7 @@
 use crate::grid::Grid;
 
 /// Samples checked per planner cycle.
-pub const SAMPLES_PER_CYCLE: u32 = 48;
+pub const SAMPLES_PER_CYCLE: u32 = 8;
 
 /// Relative time cost of a distance on each axis, Q8: the slower link's acceleration over
 /// each link's (`reflex::BRAKE_U_S2`, the servo's braking acceleration, which is its

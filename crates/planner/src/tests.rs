@@ -364,4 +364,3 @@ fn bfs_by(s: [i32; 2], blocked: impl Fn([i32; 2]) -> bool) -> Vec<bool> {
     }
     seen
 }
-

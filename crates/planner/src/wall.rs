@@ -56,7 +56,10 @@ pub fn toward(c: [i32; 2], g: [i32; 2]) -> [i32; 2] {
     let (x, y) = (g[0] - c[0], g[1] - c[1]);
     let sign = |v: i32| (v >> 31) | ((v.wrapping_neg() as u32) >> 31) as i32;
     let ymajor = lt(abs(x), abs(y));
-    [c[0] + pick(ymajor, 0, sign(x)), c[1] + pick(ymajor, sign(y), 0)]
+    [
+        c[0] + pick(ymajor, 0, sign(x)),
+        c[1] + pick(ymajor, sign(y), 0),
+    ]
 }
 
 /// Cross product of (goal - hit) and (c - hit): which side of the M-line `c` is on.

@@ -71,26 +71,12 @@ impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
             .or_words(vme_map::layout::CSPACE_STRIPES + 4 * i1, n, 4)
     }
     fn row_bits(&mut self, i2: u32, i1: u32) -> u32 {
-        let base = vme_map::layout::cspace_counter(i1, i2, 0);
-        let mut bits = 0;
-        let mut k = 0;
-        while k < 32 {
-            let w = self.0.read_u32(base + 4 * k);
-            bits |= ((w | w.wrapping_neg()) >> 31) << k;
-            k += 1;
-        }
-        bits
+        self.0
+            .nonzero_bits(vme_map::layout::cspace_counter(i1, i2, 0))
     }
     fn stripe_bits(&mut self, i1: u32) -> u32 {
-        let base = vme_map::layout::CSPACE_STRIPES + 4 * i1;
-        let mut bits = 0;
-        let mut k = 0;
-        while k < 32 {
-            let w = self.0.read_u32(base + 4 * k);
-            bits |= ((w | w.wrapping_neg()) >> 31) << k;
-            k += 1;
-        }
-        bits
+        self.0
+            .nonzero_bits(vme_map::layout::CSPACE_STRIPES + 4 * i1)
     }
 }
 

@@ -217,6 +217,35 @@ __vme_or_words:
     move.l  (%sp)+, %d2
 9:  rts
 
+/* ---- nonzero words as bits: a row of the planner's bitmap (vme-map's GlobalBus::nonzero_bits)
+ * u32 __vme_nonzero_bits(const u32 *addr): bit k set when the k-th of the 32 consecutive
+ * words from addr is nonzero. TST.L (An)+ and BSET, four words a pass. */
+    .section .text.__vme_nonzero_bits, "ax"
+    .globl __vme_nonzero_bits
+__vme_nonzero_bits:
+    movea.l 4(%sp), %a0
+    moveq   #0, %d0
+    moveq   #0, %d1             /* bit index */
+1:  tst.l   (%a0)+
+    beq.s   2f
+    bset    %d1, %d0
+2:  addq.l  #1, %d1
+    tst.l   (%a0)+
+    beq.s   3f
+    bset    %d1, %d0
+3:  addq.l  #1, %d1
+    tst.l   (%a0)+
+    beq.s   4f
+    bset    %d1, %d0
+4:  addq.l  #1, %d1
+    tst.l   (%a0)+
+    beq.s   5f
+    bset    %d1, %d0
+5:  addq.l  #1, %d1
+    cmpi.l  #32, %d1
+    bne.s   1b
+    rts
+
 /* ---- fixed-point multiply: the servo's only wide arithmetic (crates/servo::fx) ----
  * i32 __fx_mul_shr(i32 a, i32 b, u32 sh), 1 <= sh <= 32:
  *   round((a * b) >> sh), saturated to i32: the 64-bit product of MULS.L, plus 1 << (sh-1),

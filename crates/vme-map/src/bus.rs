@@ -35,6 +35,19 @@ pub trait GlobalBus {
         }
         acc
     }
+    /// Bit `k` set when the `k`-th of the 32 consecutive aligned words from `off` is
+    /// nonzero: 32 pixels of a C-space map row as one word of the planner's bitmap (on the
+    /// 68020 a `TST.L (An)+` loop in the runtime's assembly).
+    fn nonzero_bits(&mut self, off: u32) -> u32 {
+        let mut bits = 0;
+        let mut k = 0;
+        while k < 32 {
+            let w = self.read_u32(off + 4 * k);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
+    }
 }
 
 /// A borrowed bus is a bus: lets code generic over a sized `G: GlobalBus` (inlined accesses
@@ -57,6 +70,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {
         (**self).or_words(off, n, stride)
+    }
+    fn nonzero_bits(&mut self, off: u32) -> u32 {
+        (**self).nonzero_bits(off)
     }
 }
 
@@ -106,6 +122,14 @@ impl GlobalBus for ArrayBus<'_> {
             acc |= u32::from_be_bytes([w[0], w[1], w[2], w[3]]);
         }
         acc
+    }
+    fn nonzero_bits(&mut self, off: u32) -> u32 {
+        let o = off as usize;
+        let mut bits = 0u32;
+        for (k, w) in self.mem[o..o + 128].chunks_exact(4).enumerate() {
+            bits |= ((w != [0, 0, 0, 0]) as u32) << k;
+        }
+        bits
     }
     fn read_u8(&mut self, off: u32) -> u8 {
         self.mem[off as usize]
@@ -182,6 +206,14 @@ impl GlobalBus for MmioGlobal {
         // SAFETY: `n` aligned words of mapped global RAM, only read.
         unsafe { __vme_or_words(Self::ptr::<u32>(off), n, stride) }
     }
+    fn nonzero_bits(&mut self, off: u32) -> u32 {
+        extern "C" {
+            // A `TST.L (An)+` / `BSET` loop in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_nonzero_bits(addr: *const u32) -> u32;
+        }
+        // SAFETY: 32 aligned words of mapped global RAM, only read.
+        unsafe { __vme_nonzero_bits(Self::ptr::<u32>(off)) }
+    }
 }
 
 #[cfg(test)]
@@ -224,6 +256,22 @@ mod tests {
                 Plain(ArrayBus::new(&mut copy)).or_words(off, n, stride),
                 fold
             );
+        }
+    }
+
+    #[test]
+    fn nonzero_bits_marks_the_nonzero_words() {
+        let mut mem = [0u8; 4096];
+        for (i, b) in mem.iter_mut().enumerate() {
+            *b = if i % 37 == 0 { 1 + (i % 251) as u8 } else { 0 };
+        }
+        let mut copy = mem;
+        for off in [0, 128, 1000, 3964] {
+            let want = (0..32).fold(0, |a, k| {
+                a | (((ArrayBus::new(&mut mem).read_u32(off + 4 * k) != 0) as u32) << k)
+            });
+            assert_eq!(ArrayBus::new(&mut mem).nonzero_bits(off), want);
+            assert_eq!(Plain(ArrayBus::new(&mut copy)).nonzero_bits(off), want);
         }
     }
 }
