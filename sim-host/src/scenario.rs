@@ -67,6 +67,13 @@ struct File {
     #[serde(default)]
     fault: Vec<Spanned<FaultDe>>,
     optics: Option<Spanned<OpticsDe>>,
+    planner: Option<PlannerDe>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlannerDe {
+    leave: Spanned<String>,
 }
 
 #[derive(Deserialize)]
@@ -449,6 +456,18 @@ impl Scenario {
                 };
             }
             cfg.optics = c;
+        }
+        if let Some(p) = &f.planner {
+            cfg.planner.leave = match p.leave.get_ref().as_str() {
+                "trajectory" => planner::Leave::Trajectory,
+                "line_of_sight" => planner::Leave::LineOfSight,
+                other => {
+                    return Err(err(
+                        p.leave.span().start,
+                        format!("unknown planner leave rule {other:?} (trajectory, line_of_sight)"),
+                    ))
+                }
+            };
         }
         Ok(Scenario {
             name: f.name,

@@ -169,6 +169,8 @@ pub struct Config {
     pub optics: OpticsConfig,
     /// The calibration table the host writes before the boards boot.
     pub calibration: Calibration,
+    /// The planner's rules (the thesis's line-of-sight leave can be asked for, fig. VI.2).
+    pub planner: planner::Config,
 }
 
 /// Where the sensing board's calibration table comes from at power-up.
@@ -196,6 +198,7 @@ impl Default for Config {
             faults: Vec::new(),
             optics: OpticsConfig::default(),
             calibration: Calibration::Model,
+            planner: planner::Config::DEFAULT,
         }
     }
 }
@@ -230,12 +233,14 @@ enum Native {
 }
 
 impl Native {
-    fn new(id: BoardId) -> Self {
+    fn new(id: BoardId, planner: planner::Config) -> Self {
         match id {
             BoardId::Sensing => Native::Sensing(Box::new(board_sensing::Board::new())),
             BoardId::Servo => Native::Servo(board_servo::Board::new()),
             BoardId::Reflex => Native::Reflex(Box::new(board_reflex::Board::new())),
-            BoardId::Planner => Native::Planner(Box::new(board_planner::Board::new())),
+            BoardId::Planner => {
+                Native::Planner(Box::new(board_planner::Board::with_config(planner)))
+            }
             c => Native::Cspace(board_cspace::Board::new(c)),
         }
     }
@@ -371,7 +376,7 @@ impl Sim {
             .iter()
             .map(|&(id, period_s)| Slot {
                 id,
-                code: Native::new(id),
+                code: Native::new(id, cfg.planner),
                 own_io: (!matches!(id, BoardId::Servo | BoardId::Sensing)).then(|| IdOnly::new(id)),
                 period_s,
                 next_s: rng.next_f64() * period_s,

@@ -50,9 +50,15 @@ impl Default for Board {
 impl Board {
     /// A fresh board.
     pub const fn new() -> Self {
+        Self::with_config(planner::Config::DEFAULT)
+    }
+
+    /// A fresh board whose planner has `cfg` (the simulator's scenarios can ask for the
+    /// thesis's line-of-sight rule, `planner::Leave`).
+    pub const fn with_config(cfg: planner::Config) -> Self {
         Self {
             shell: Shell::new(BoardId::Planner),
-            planner: Planner::new(),
+            planner: Planner::with_config(cfg),
             cycle: 0,
             passes: 0,
             servo_w: [0; SERVO_WORDS],

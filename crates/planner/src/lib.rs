@@ -124,9 +124,35 @@ enum Mode {
     Unreachable(u32),
 }
 
+/// How wall following may end early for the goal (thesis ch. VI section 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Leave {
+    /// Ours: when the servo's real path to the goal is clear ([`sight`]), and after a
+    /// non-converging stall only nearer the goal than the hit point.
+    Trajectory,
+    /// The thesis's as built: when the straight line of sight to the goal is clear, from
+    /// anywhere (loops in fig. VI.2's scene; kept to show it).
+    LineOfSight,
+}
+
+/// Tunable behaviour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// The early-leave rule.
+    pub leave: Leave,
+}
+
+impl Config {
+    /// Ours.
+    pub const DEFAULT: Config = Config {
+        leave: Leave::Trajectory,
+    };
+}
+
 /// The planner's state between cycles.
 #[derive(Clone, Debug)]
 pub struct Planner {
+    cfg: Config,
     grid: Grid,
     fill: Fill,
     sight: Sight,
@@ -213,7 +239,13 @@ pub fn centre_urad(c: [i32; 2]) -> [i32; 2] {
 impl Planner {
     /// A fresh planner.
     pub const fn new() -> Self {
+        Self::with_config(Config::DEFAULT)
+    }
+
+    /// A fresh planner with `cfg`.
+    pub const fn with_config(cfg: Config) -> Self {
         Self {
+            cfg,
             grid: Grid::new(),
             fill: Fill::new(),
             sight: Sight::new(),
@@ -542,7 +574,7 @@ impl Planner {
             return;
         };
         let d = d2(start, goal);
-        if d >= self.last_hit_d2 {
+        if d >= self.last_hit_d2 && self.cfg.leave == Leave::Trajectory {
             // No nearer than the last hit point: the M-path did not converge.
             if self.strict_sight {
                 self.next_approach(theta);
@@ -678,7 +710,7 @@ impl Planner {
         match self.sight.work(&self.grid) {
             Verdict::Clear => {
                 let near = d2(arm, goal) < self.hit_d2;
-                if !self.strict_sight || near {
+                if !self.strict_sight || near || self.cfg.leave == Leave::LineOfSight {
                     self.sight.stop();
                     self.set_mode(Mode::Free);
                     return;
@@ -715,6 +747,7 @@ impl Planner {
             self.sight.start(
                 [urad_to_u(sv.theta_urad[0]), urad_to_u(sv.theta_urad[1])],
                 [urad_to_u(g[0]), urad_to_u(g[1])],
+                self.cfg.leave == Leave::LineOfSight,
             );
         }
     }

@@ -38,6 +38,8 @@ pub struct Sight {
     k: u32,
     n: u32,
     active: u32,
+    /// The thesis's straight line of sight instead of the servo's path (fig. VI.2).
+    straight: u32,
 }
 
 /// Where a check stands.
@@ -79,12 +81,16 @@ impl Sight {
             k: 0,
             n: 0,
             active: 0,
+            straight: 0,
         }
     }
 
-    /// Starts checking the move from `from_u` to `to_u` (angle units, unwrapped).
+    /// Starts checking the move from `from_u` to `to_u` (angle units, unwrapped): along the
+    /// servo's path, or with `straight` along the straight line (the thesis's line of
+    /// sight, kept to show fig. VI.2's looping).
     #[inline(never)]
-    pub fn start(&mut self, from_u: [i32; 2], to_u: [i32; 2]) {
+    pub fn start(&mut self, from_u: [i32; 2], to_u: [i32; 2], straight: bool) {
+        self.straight = straight as u32;
         self.from_u = from_u;
         self.to_u = to_u;
         let d1 = (to_u[0] - from_u[0]).abs();
@@ -139,8 +145,14 @@ impl Sight {
     /// The cell the move is in at normalised time `t` (Q15).
     #[inline(never)]
     fn sample(&self, t: i32) -> [i32; 2] {
-        let f1 = profile_q15(fx::mul_shr(t, self.inv_r_q8[0], 8));
-        let f2 = profile_q15(fx::mul_shr(t, self.inv_r_q8[1], 8));
+        let (f1, f2) = if self.straight != 0 {
+            (t.clamp(0, 1 << 15), t.clamp(0, 1 << 15))
+        } else {
+            (
+                profile_q15(fx::mul_shr(t, self.inv_r_q8[0], 8)),
+                profile_q15(fx::mul_shr(t, self.inv_r_q8[1], 8)),
+            )
+        };
         let p1 = self.from_u[0] + fx::mul_shr(self.to_u[0] - self.from_u[0], f1, 15);
         let p2 = self.from_u[1] + fx::mul_shr(self.to_u[1] - self.from_u[1], f2, 15);
         [p1 >> 8, p2 >> 8]

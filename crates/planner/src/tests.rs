@@ -269,7 +269,7 @@ fn the_trajectory_check_bends_like_the_servo() {
     };
     g.refresh(&mut m, 128);
     let mut s = Sight::new();
-    s.start([20 * 256, 20 * 256], [60 * 256, 60 * 256]);
+    s.start([20 * 256, 20 * 256], [60 * 256, 60 * 256], false);
     let v = loop {
         match s.work(&g) {
             Verdict::Running => continue,
@@ -285,7 +285,7 @@ fn the_trajectory_check_bends_like_the_servo() {
         stripes: &w2.stripes,
     };
     g2.refresh(&mut m2, 128);
-    s.start([20 * 256, 20 * 256], [60 * 256, 60 * 256]);
+    s.start([20 * 256, 20 * 256], [60 * 256, 60 * 256], false);
     let v = loop {
         match s.work(&g2) {
             Verdict::Running => continue,
