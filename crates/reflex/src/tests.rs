@@ -157,8 +157,9 @@ fn walls_along_both_axes_stop_both() {
 
 #[test]
 fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
-    // Fig. V.10: the obstacle moved over the arm; it heads for the nearest free pixel, a
-    // step of at most ESCAPE_STEP_U a pass, and gets out.
+    // Fig. V.10: the obstacle moved over the arm (the sensing board flags it moving); it
+    // heads for the nearest free pixel, a step of at most ESCAPE_STEP_U a pass, and gets
+    // out.
     let mut m = TestMap::new();
     let p = (1.0 / PIX).floor() as i32;
     m.block(p - 2, p + 6, p - 6, p + 6);
@@ -170,7 +171,7 @@ fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
             servo: Some(servo_at(th, [0.0; 2], k)),
             goal: planner([2.0, 1.0], k),
             health: healthy(k),
-            obstacles_moving: false,
+            obstacles_moving: true,
         };
         let o = r.step(&inp, &mut m.map());
         let s = sub(&o);
@@ -186,6 +187,44 @@ fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
     }
     assert!(escaped);
     assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
+}
+
+#[test]
+fn an_arm_the_map_covers_among_resting_obstacles_holds_instead_of_crossing() {
+    // The same block over the arm, but nothing moves: the arm is where it got through free
+    // space (or started), so it holds (trapped) rather than cross marked pixels.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p - 2, p + 6, p - 6, p + 6);
+    let mut r = Reflex::default();
+    let th = [1.0, 1.0];
+    let mut held = 0;
+    for k in 1..=40 {
+        let inp = Input {
+            servo: Some(servo_at(th, [0.0; 2], k)),
+            goal: planner([2.0, 1.0], k),
+            health: healthy(k),
+            obstacles_moving: false,
+        };
+        let o = r.step(&inp, &mut m.map());
+        if o.flags & flags::WAITING != 0 {
+            continue;
+        }
+        held += 1;
+        assert_eq!(o.flags & flags::ESCAPING, 0, "pass {k}");
+        assert_ne!(
+            o.flags & flags::TRAPPED,
+            0,
+            "pass {k}: flags {:#x}",
+            o.flags
+        );
+        let s = sub(&o);
+        assert!(
+            (s[0] - th[0]).abs() < 1e-3 && (s[1] - th[1]).abs() < 1e-3,
+            "pass {k}: {s:?}"
+        );
+    }
+    assert!(held > 20, "{held} passes past start-up");
 }
 
 #[test]
