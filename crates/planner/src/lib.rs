@@ -381,20 +381,12 @@ impl Planner {
         let goal_urad = self.target();
         let goal_c = cell_of(goal_urad);
         let flags = inp.reflex_flags.unwrap_or(0);
-        let settled = self.now_us.wrapping_sub(self.mode_since_us) > SETTLE_US;
 
         match self.mode {
             Mode::Idle => {}
             Mode::Unreachable(_) => {}
             Mode::Free => {
-                let d = d2(arm, goal_c);
-                if d < self.best_d2 {
-                    self.best_d2 = d;
-                    self.best_since_us = self.now_us;
-                }
-                let no_progress = self.now_us.wrapping_sub(self.best_since_us) > PROGRESS_US;
-                let stalled = flags & rf::STALLED != 0 && flags & rf::FROM_PLANNER != 0;
-                if settled && (stalled || no_progress) && arm != goal_c {
+                if self.free_stall(arm, goal_c, flags) != 0 {
                     self.hit_wall(arm, goal_c, sv.theta_urad);
                 }
             }
@@ -411,6 +403,29 @@ impl Planner {
         out.mode = m | (self.approach << 8);
         out.reason = why;
         out
+    }
+
+    /// Free mode: 1 when the arm stalled short of the goal cell `goal` (the reflex's flag
+    /// for the planner's goal, or no cell of progress for [`PROGRESS_US`]) once the mode
+    /// has settled. Sign masks, not compares and branches (docs/toolchain.md).
+    #[inline(never)]
+    fn free_stall(&mut self, arm: [i32; 2], goal: [i32; 2], flags: u32) -> u32 {
+        let d = d2(arm, goal);
+        let better = masks::lt(d, self.best_d2);
+        self.best_d2 = masks::pick(better, d, self.best_d2);
+        self.best_since_us =
+            masks::pick(better, self.now_us as i32, self.best_since_us as i32) as u32;
+        let since_best = self.now_us.wrapping_sub(self.best_since_us) as i32;
+        let since_mode = self.now_us.wrapping_sub(self.mode_since_us) as i32;
+        let no_progress = masks::lt(PROGRESS_US as i32, since_best);
+        let settled = masks::lt(SETTLE_US as i32, since_mode);
+        let stalled = (((flags >> rf::STALLED.trailing_zeros())
+            & (flags >> rf::FROM_PLANNER.trailing_zeros())
+            & 1) as i32)
+            .wrapping_neg();
+        let off = (arm[0] - goal[0]) | (arm[1] - goal[1]);
+        let away = (off | off.wrapping_neg()) >> 31;
+        (settled & (stalled | no_progress) & away & 1) as u32
     }
 
     /// A new goal from the wand: its two poses; the pose the last fill reached (nearest the
