@@ -9,7 +9,10 @@ use vme_map::{BoardId, BoardState, FaultCode};
 
 fn planted(words: &[u16]) -> (System, u32) {
     let mut sys = System::power_up(&images_dir(), &[BoardId::Planner]).unwrap();
-    sys.run_ms(1.0);
+    // Running: past the runtime's start-up (the planner copies 14 KiB of state first, 2.7
+    // ms: `sim-host boot planner`).
+    sys.run_ms(4.0);
+    assert!(sys.heartbeat(BoardId::Planner) > 0, "the planner runs");
     let b = &mut sys.boards[0];
     let pc = b.cpu.pc;
     for (i, w) in words.iter().enumerate() {
@@ -65,7 +68,7 @@ fn address_error_on_an_odd_jump() {
 #[test]
 fn a_non_maskable_interrupt_with_no_handler_is_unexpected() {
     let mut sys = System::power_up(&images_dir(), &[BoardId::Planner]).unwrap();
-    sys.run_ms(1.0);
+    sys.run_ms(4.0);
     sys.boards[0].cpu.set_irq(7);
     sys.run_ms(0.2);
     sys.boards[0].cpu.set_irq(0);
