@@ -101,6 +101,9 @@ pub const ESCAPE_CLEAR_PX: i32 = 1;
 pub const REACT_US: i32 = 100_000;
 /// At rest, short of the goal, the subgoal stuck this long: stalled.
 pub const STALL_US: u32 = 200_000;
+/// An arm stuck this long with its own margins on an obstacle backs off to clearance (twice
+/// [`STALL_US`]: the stall is flagged first).
+pub const FROZEN_US: u32 = 2 * STALL_US;
 /// Below this speed (both links) the arm counts as at rest, micro-radians per second.
 pub const REST_URAD_S: i32 = 50_000;
 /// The goal counts as reached within this distance (each axis), micro-radians (2 encoder
@@ -490,13 +493,17 @@ impl Reflex {
             sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
         } else {
             // An obstacle within the arm's own neighbourhood (wider among moving obstacles)
-            // must be evaded; short of that, brake. An arm at rest whose margins meet an
-            // obstacle (it started there, or the map's edge moved by a pixel) cannot brake
-            // any further: it backs off to clearance, or would stand frozen (planner
-            // campaign seed 2 scene 4: an arm 15 mm from a disk never moved).
-            let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
-                && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
-            let near = !window::rect_free(map, a1.own, a2.own, &mut tests) || at_rest;
+            // must be evaded; short of that, brake. An arm that has stood still for
+            // [`FROZEN_US`] (stalled, and flagged so, first) with its own margins on an
+            // obstacle (it started there, braked into the band, or the map's edge moved by a
+            // pixel) cannot brake any further: it backs off to clearance, or would stand
+            // frozen for good (planner campaign seed 2 scene 4: an arm 15 mm from a disk
+            // never moved).
+            let frozen = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
+                && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S
+                && self.now_us.wrapping_sub(self.stall_since_us) > FROZEN_US;
+            let near = !window::rect_free(map, a1.own, a2.own, &mut tests)
+                || (frozen && !window::rect_free(map, a1.rest, a2.rest, &mut tests));
             if !near && window::rect_free(map, a1.core, a2.core, &mut tests) {
                 // Brake: the subgoal between the arm and its arrest point, as near the goal
                 // as that allows, so the arrest region only shrinks (a subgoal beyond the
@@ -673,6 +680,9 @@ struct Axis {
     base: Span,
     core: Span,
     own: Span,
+    /// The arm itself with the base rectangle's margins (an arm at rest that this meets
+    /// an obstacle cannot brake any further).
+    rest: Span,
 }
 
 /// Fills `a` with axis `i`'s state.
@@ -717,6 +727,7 @@ fn spans(a: &mut Axis, obs: i32, wide: i32) {
     let bhi = masks::max(ghi, masks::pick(outside, hi, a.arrest));
     let m = MARGIN_U + obs + wide;
     a.base = Span::of_units(blo - m, bhi + m);
+    a.rest = Span::of_units(a.theta - m, a.theta + m);
     // The arm itself over the latency.
     let fwd = a.reach_u & !a.back;
     let bwd = a.reach_u & a.back;
