@@ -230,13 +230,7 @@ pub struct Profile {
 /// function (nearest symbol at or below the PC) it belongs to.
 pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageError> {
     let image = Image::load(&dir.join(format!("{}.elf", image_name(board))))?;
-    let mut syms: Vec<(u32, String)> = image
-        .symbols
-        .iter()
-        .filter(|(n, _)| !n.is_empty() && !n.starts_with('.'))
-        .map(|(n, a)| (*a, n.clone()))
-        .collect();
-    syms.sort();
+    let mut per = FunctionCycles::new(&image);
     let mut sys = System::power_up(dir, &[board])?;
     if board == BoardId::Sensing {
         // Eight beacons in view, and past the calibration table's check: the steady state.
@@ -268,13 +262,11 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
     let b = &mut sys.boards[0];
     let start = b.cycles;
     let end = start + (ms * CPU_HZ as f64 / 1000.0) as u64;
-    let mut per: std::collections::HashMap<usize, u64> = std::collections::HashMap::new();
     let mut next_feed = start + quarter_ms;
     while b.cycles < end && b.state == RunState::Running {
         let pc = b.cpu.pc;
         let c = b.step(&mut sys.global);
-        let i = syms.partition_point(|(a, _)| *a <= pc);
-        *per.entry(i).or_default() += c;
+        per.charge(pc, c);
         if b.cycles >= next_feed {
             next_feed += quarter_ms;
             if let Some(f) = feed.as_mut() {
@@ -288,21 +280,62 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
     }
     let cycles = b.cycles - start;
     let loops = sys.heartbeat(board).wrapping_sub(hb0) as u64;
-    let mut functions: Vec<(String, u64)> = per
-        .into_iter()
-        .map(|(i, c)| {
-            let name = if i == 0 {
-                "?".to_string()
-            } else {
-                syms[i - 1].1.clone()
-            };
-            (name, c)
-        })
-        .collect();
-    functions.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let functions = per.top();
     Ok(Profile {
         cycles,
         loops,
         functions,
     })
+}
+
+/// Cycles charged to an image's functions: each instruction's to the nearest symbol at or
+/// below its PC (`sim-host profile`, and the worst passes of `sim-host bench planner`).
+pub struct FunctionCycles {
+    syms: Vec<(u32, String)>,
+    cycles: Vec<u64>,
+}
+
+impl FunctionCycles {
+    /// Nothing charged yet, to `image`'s functions.
+    pub fn new(image: &Image) -> Self {
+        let mut syms: Vec<(u32, String)> = image
+            .symbols
+            .iter()
+            .filter(|(n, _)| !n.is_empty() && !n.starts_with('.'))
+            .map(|(n, a)| (*a, n.clone()))
+            .collect();
+        syms.sort();
+        let cycles = vec![0; syms.len() + 1];
+        Self { syms, cycles }
+    }
+
+    /// Charges `c` cycles to the function holding `pc`.
+    pub fn charge(&mut self, pc: u32, c: u64) {
+        self.cycles[self.syms.partition_point(|(a, _)| *a <= pc)] += c;
+    }
+
+    /// Forgets every charge.
+    pub fn clear(&mut self) {
+        self.cycles.iter_mut().for_each(|c| *c = 0);
+    }
+
+    /// The functions charged, costliest first (`?` before the first symbol).
+    pub fn top(&self) -> Vec<(String, u64)> {
+        let mut v: Vec<(String, u64)> = self
+            .cycles
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| c > 0)
+            .map(|(i, &c)| {
+                let name = if i == 0 {
+                    "?".to_string()
+                } else {
+                    self.syms[i - 1].1.clone()
+                };
+                (name, c)
+            })
+            .collect();
+        v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        v
+    }
 }

@@ -250,6 +250,39 @@ pub struct Summary {
     pub wall_s: f64,
 }
 
+/// Runs `f(0..n)` on `threads` threads, each taking the next index in turn; calls
+/// `progress` after each. The results come in no particular order (campaigns sort them by
+/// index): which thread ran what does not change them.
+pub fn in_parallel<R: Send>(
+    n: u64,
+    threads: usize,
+    progress: &(dyn Fn() + Sync),
+    f: impl Fn(u64) -> R + Sync,
+) -> Vec<R> {
+    let next = std::sync::atomic::AtomicU64::new(0);
+    std::thread::scope(|sc| {
+        let handles: Vec<_> = (0..threads.max(1))
+            .map(|_| {
+                sc.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if i >= n {
+                            return mine;
+                        }
+                        mine.push(f(i));
+                        progress();
+                    }
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a scene thread"))
+            .collect()
+    })
+}
+
 /// Runs `n` scenes of `kind` with seed `seed` on `threads` threads (results in index order,
 /// the same whatever `threads`). `progress` is called after each scene.
 pub fn campaign(
@@ -260,28 +293,7 @@ pub fn campaign(
     progress: &(dyn Fn() + Sync),
 ) -> (Summary, Vec<SceneResult>) {
     let start = std::time::Instant::now();
-    let next = std::sync::atomic::AtomicU64::new(0);
-    let mut results: Vec<SceneResult> = std::thread::scope(|sc| {
-        let handles: Vec<_> = (0..threads.max(1))
-            .map(|_| {
-                sc.spawn(|| {
-                    let mut mine = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if i >= n {
-                            return mine;
-                        }
-                        mine.push(run_scene(&scene(kind, seed, i)));
-                        progress();
-                    }
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().expect("a scene thread"))
-            .collect()
-    });
+    let mut results = in_parallel(n, threads, progress, |i| run_scene(&scene(kind, seed, i)));
     results.sort_by_key(|r| r.index);
     let mut times: Vec<f64> = results.iter().filter_map(|r| r.goal_time_s).collect();
     times.sort_by(f64::total_cmp);

@@ -187,14 +187,7 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
     let hb = BoardSlot::of(BoardId::Planner).heartbeat();
     // The image's functions, to say where the worst pass's cycles went.
     let image = crate::image::Image::load(&dir.join("planner.elf")).map_err(|e| e.to_string())?;
-    let mut syms: Vec<(u32, String)> = image
-        .symbols
-        .iter()
-        .filter(|(n, _)| !n.is_empty() && !n.starts_with('.'))
-        .map(|(n, a)| (*a, n.clone()))
-        .collect();
-    syms.sort();
-    let mut cur = vec![0u64; syms.len() + 1];
+    let mut cur = crate::boot::FunctionCycles::new(&image);
     let mut worst: Vec<(String, u64)> = Vec::new();
     let mut theta = case.start_rad;
     let (mut stuck, mut flags) = (0u32, 0u32);
@@ -209,14 +202,14 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
         let b = &mut sys.boards[0];
         let h0 = ArrayBus::new(&mut sys.global).read_u32(hb);
         let c0 = b.cycles;
-        cur.iter_mut().for_each(|c| *c = 0);
+        cur.clear();
         while ArrayBus::new(&mut sys.global).read_u32(hb) == h0 {
             if b.state != crate::emu::RunState::Running || b.cycles - c0 > CPU_HZ {
                 return Err(format!("{}: the image stopped at pass {k}", case.name));
             }
             let pc = b.cpu.pc;
             let c = b.step(&mut sys.global);
-            cur[syms.partition_point(|(a, _)| *a <= pc)] += c;
+            cur.charge(pc, c);
         }
         let c = b.cycles - c0;
         native.poll(&mut ArrayBus::new(&mut native_g), &mut io);
@@ -230,20 +223,7 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
         if k >= 40 {
             cmin = cmin.min(c);
             if c > cmax {
-                worst = cur
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &c)| c > 0)
-                    .map(|(i, &c)| {
-                        let name = if i == 0 {
-                            "?".into()
-                        } else {
-                            syms[i - 1].1.clone()
-                        };
-                        (name, c)
-                    })
-                    .collect();
-                worst.sort_by_key(|w| std::cmp::Reverse(w.1));
+                worst = cur.top();
                 worst.truncate(5);
             }
             cmax = cmax.max(c);

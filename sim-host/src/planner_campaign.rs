@@ -607,28 +607,8 @@ pub fn campaign(
     progress: &(dyn Fn() + Sync),
 ) -> (Summary, Vec<SceneResult>) {
     let start = std::time::Instant::now();
-    let next = std::sync::atomic::AtomicU64::new(0);
-    let mut results: Vec<SceneResult> = std::thread::scope(|sc| {
-        let handles: Vec<_> = (0..threads.max(1))
-            .map(|_| {
-                sc.spawn(|| {
-                    let mut mine = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if i >= n {
-                            return mine;
-                        }
-                        mine.push(run_scene(&scene(seed, i), None));
-                        progress();
-                    }
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().expect("a scene thread"))
-            .collect()
-    });
+    let mut results =
+        crate::campaign::in_parallel(n, threads, progress, |i| run_scene(&scene(seed, i), None));
     results.sort_by_key(|r| r.index);
     let solv: Vec<&SceneResult> = results
         .iter()
