@@ -382,6 +382,14 @@ pub fn scenario_text_titled(title: &str, c: &Config) -> String {
     t
 }
 
+/// Creates the campaign directory `out` and writes `summary.json` into it.
+pub fn write_summary(out: &Path, summary: &impl Serialize) -> Result<(), String> {
+    let io = |e: std::io::Error| format!("{}: {e}", out.display());
+    std::fs::create_dir_all(out).map_err(io)?;
+    let json = serde_json::to_string_pretty(summary).expect("summary serializes");
+    std::fs::write(out.join("summary.json"), json + "\n").map_err(io)
+}
+
 /// Runs a campaign and writes `summary.json`, `scenes.csv` and a scenario file per scene
 /// with a collision into `out`.
 pub fn run_to_dir(
@@ -393,10 +401,8 @@ pub fn run_to_dir(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
-    std::fs::create_dir_all(out).map_err(io)?;
     let (summary, results) = campaign(kind, seed, n, threads, progress);
-    let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
-    std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;
+    write_summary(out, &summary)?;
     let mut csv = String::from(
         "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms\n",
     );

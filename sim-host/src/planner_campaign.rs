@@ -783,10 +783,8 @@ pub fn run_to_dir(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
-    std::fs::create_dir_all(out).map_err(io)?;
     let (summary, results) = campaign(seed, n, threads, progress);
-    let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
-    std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;
+    crate::campaign::write_summary(out, &summary)?;
     let mut csv = String::from(
         "index,class,oracle_path_rad,estimate_s,goal_time_s,unreachable_s,reason,walls,approach,collisions,min_clearance_m,ran_s\n",
     );
