@@ -69,6 +69,11 @@ pub const SETTLE_US: u32 = 60_000;
 /// reflex's own stall flag needs the arm at rest, which an arm that backs off from a
 /// flickering wall edge and returns never is).
 pub const PROGRESS_US: u32 = 300_000;
+/// Free mode: blocked at walls on every axis short of the goal, and slow, this long: a
+/// stall.
+pub const BLOCKED_US: u32 = 60_000;
+/// Slower than this (both links) counts as held, micro-radians per second.
+pub const SLOW_URAD_S: i32 = 300_000;
 /// Wall following longer than this without leaving: the next approach.
 pub const WALL_LIMIT_US: u32 = 20_000_000;
 /// Steps each scout takes per planner cycle.
@@ -196,6 +201,8 @@ pub struct Planner {
     /// Free mode: the nearest the arm came to the goal (squared cells), and when.
     best_d2: i32,
     best_since_us: u32,
+    /// Free mode: since when the arm has been held at walls.
+    held_since_us: u32,
     /// A fill has been started.
     filling: bool,
     /// Which background job this cycle does (map rows or the fill).
@@ -275,6 +282,7 @@ impl Planner {
             last_request: [0; 2],
             best_d2: i32::MAX,
             best_since_us: 0,
+            held_since_us: 0,
             filling: false,
             tick: 0,
             walk: [0; 2],
@@ -386,7 +394,7 @@ impl Planner {
             Mode::Idle => {}
             Mode::Unreachable(_) => {}
             Mode::Free => {
-                if self.free_stall(arm, goal_c, flags) != 0 {
+                if self.free_stall(arm, goal_c, flags, &sv.omega_urad_s) != 0 {
                     self.hit_wall(arm, goal_c, sv.theta_urad);
                 }
             }
@@ -409,7 +417,13 @@ impl Planner {
     /// for the planner's goal, or no cell of progress for [`PROGRESS_US`]) once the mode
     /// has settled. Sign masks, not compares and branches (docs/toolchain.md).
     #[inline(never)]
-    fn free_stall(&mut self, arm: [i32; 2], goal: [i32; 2], flags: u32) -> u32 {
+    fn free_stall(
+        &mut self,
+        arm: [i32; 2],
+        goal: [i32; 2],
+        flags: u32,
+        omega_urad_s: &[i32; 2],
+    ) -> u32 {
         let d = d2(arm, goal);
         let better = masks::lt(d, self.best_d2);
         self.best_d2 = masks::pick(better, d, self.best_d2);
@@ -423,9 +437,28 @@ impl Planner {
             & (flags >> rf::FROM_PLANNER.trailing_zeros())
             & 1) as i32)
             .wrapping_neg();
+        // Held at walls: every axis still short of the goal is blocked (the reflex's
+        // flags) and the arm is slow, for BLOCKED_US: the stall, sooner than the reflex's
+        // own flag (which waits for rest).
+        let short = |i: usize| {
+            let d = arm[i] - goal[i];
+            (d | d.wrapping_neg()) >> 31
+        };
+        let b1 = (((flags >> rf::BLOCKED1.trailing_zeros()) & 1) as i32).wrapping_neg();
+        let b2 = (((flags >> rf::BLOCKED2.trailing_zeros()) & 1) as i32).wrapping_neg();
+        let held_axes = (!short(0) | b1) & (!short(1) | b2) & (b1 | b2);
+        let slow = masks::lt(masks::abs(omega_urad_s[0]), SLOW_URAD_S)
+            & masks::lt(masks::abs(omega_urad_s[1]), SLOW_URAD_S);
+        let held = held_axes & slow;
+        self.held_since_us =
+            masks::pick(held, self.held_since_us as i32, self.now_us as i32) as u32;
+        let held_long = masks::lt(
+            BLOCKED_US as i32,
+            self.now_us.wrapping_sub(self.held_since_us) as i32,
+        ) & held;
         let off = (arm[0] - goal[0]) | (arm[1] - goal[1]);
         let away = (off | off.wrapping_neg()) >> 31;
-        (settled & (stalled | no_progress) & away & 1) as u32
+        (settled & (stalled | no_progress | held_long) & away & 1) as u32
     }
 
     /// A new goal from the wand: its two poses; the pose the last fill reached (nearest the
