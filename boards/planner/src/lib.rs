@@ -102,10 +102,10 @@ impl Board {
             Ok(0) | Err(_) => None,
             Ok(_) => Some(self.subgoal_w[2]),
         };
-        // The wand every eighth pass: it moves little in 8 ms, and the 33-word table is a
+        // The wand every sixteenth pass: it moves little in 16 ms, and the 33-word table is a
         // tenth of a pass to read.
         self.passes = self.passes.wrapping_add(1);
-        if self.passes & 7 == 1 {
+        if self.passes & 15 == 1 {
             let ok = vme_map::OBJECTS.read_raw(g, &mut self.objects_w).is_ok();
             self.input.wand_um = wand(&self.objects_w, ok);
         }

@@ -13,7 +13,7 @@
 use crate::grid::{spread, Grid, Row, SIDE, WORDS};
 
 /// Fill rows worked per turn (every other planner cycle), at most.
-pub const ROWS_PER_CYCLE: u32 = 4;
+pub const ROWS_PER_CYCLE: u32 = 3;
 /// Rows looked at per planner cycle (at most).
 pub const SCAN_PER_CYCLE: u32 = 32;
 /// Rows of the bitmap cleared per planner cycle before a fill starts.

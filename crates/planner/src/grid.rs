@@ -65,8 +65,8 @@ impl Grid {
         self.sweeps
     }
 
-    /// Reads the next `rows` rows of the map (and the stripes at row 0) and regrows the
-    /// blocked row above each (whose neighbours are then both read).
+    /// Reads the next `rows` rows of the map (and the stripes at row 0) and regrows each
+    /// and the blocked row above it.
     #[inline(never)]
     pub fn refresh<M: Map + ?Sized>(&mut self, map: &mut M, rows: u32) {
         let mut n = 0;
@@ -76,9 +76,11 @@ impl Grid {
                 read_stripes(&mut self.stripes, map);
             }
             read_row(&mut self.occ[r as usize], &self.stripes, map, r);
-            // Row r - 1 now has both neighbours read this sweep (row r is regrown when
-            // row r + 1 is read: a row's lag behind the map is one more row read).
+            // Row r - 1 now has both neighbours read this sweep; row r is grown too, from
+            // the row below as last read (regrown when that is read: a marked pixel is
+            // always blocked at once, its dilation into the row above a row later).
             self.grow_row((r + 127) & 127);
+            self.grow_row(r);
             self.next_row = (r + 1) & 127;
             self.sweeps += (self.next_row == 0) as u32;
             n += 1;
