@@ -338,3 +338,21 @@ pub fn survey(seed: u64, n: u64, progress: &(dyn Fn(u64) + Sync)) -> Survey {
     }
     out
 }
+
+/// Draws obstacle disks (x, y, r in millimetres) into the C-space map of global RAM `g` with
+/// the C-space boards' own logic: the map the benches and image tests hand the reflex and
+/// planner images.
+pub fn draw_disks_mm(
+    g: &mut dyn vme_map::GlobalBus,
+    disks: &[(i32, i32, i32)],
+) -> Result<(), cspace::Error> {
+    for &(x, y, r) in disks {
+        let d = Disk {
+            x_um: x * 1000,
+            y_um: y * 1000,
+            r_um: r * 1000,
+        };
+        cspace::apply(&cspace::images(&d)?, &mut cspace::BusCanvas(g), Op::Draw);
+    }
+    Ok(())
+}

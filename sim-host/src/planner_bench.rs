@@ -72,8 +72,6 @@ pub struct Report {
     pub cycles: [f64; 3],
     /// Modes seen (bit per mode code).
     pub modes: u32,
-    /// The last record.
-    pub last: [u32; 5],
     /// Where the worst pass's cycles went: the five costliest functions.
     pub worst: Vec<(String, u64)>,
 }
@@ -97,20 +95,8 @@ fn global_with(disks: &[(i32, i32, i32)]) -> Result<Vec<u8>, String> {
 }
 
 fn draw(global: &mut [u8], disks: &[(i32, i32, i32)]) -> Result<(), String> {
-    for &(x, y, r) in disks {
-        let d = cspace::Disk {
-            x_um: x * 1000,
-            y_um: y * 1000,
-            r_um: r * 1000,
-        };
-        let im = cspace::images(&d).map_err(|e| format!("{e:?}"))?;
-        cspace::apply(
-            &im,
-            &mut cspace::BusCanvas(&mut ArrayBus::new(global)),
-            cspace::Op::Draw,
-        );
-    }
-    Ok(())
+    crate::cspace_oracle::draw_disks_mm(&mut ArrayBus::new(global), disks)
+        .map_err(|e| format!("{e:?}"))
 }
 
 /// Whether the map in `global` marks the pixel of angles `a` (rad).
@@ -193,7 +179,6 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
     let (mut stuck, mut flags) = (0u32, 0u32);
     let (mut cmin, mut csum, mut cmax) = (u64::MAX, 0u64, 0u64);
     let mut modes = 0u32;
-    let mut last = [0u32; 5];
     let mut mismatch = None;
     for k in 0..case.passes {
         feed(&mut sys.global, theta, k, flags, case.wand_mm);
@@ -217,7 +202,6 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
         if ri != rn && mismatch.is_none() {
             mismatch = Some((k, ri, rn));
         }
-        last = rn;
         modes |= 1 << (rn[2] & 0x1F);
         // Skip the start-up passes (the first whole read of the map) in the cost.
         if k >= 40 {
@@ -255,7 +239,6 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
         mismatch,
         cycles: [cmin as f64, csum as f64 / n, cmax as f64],
         modes,
-        last,
         worst,
     })
 }

@@ -121,13 +121,8 @@ fn image_case(
     {
         let mut g = sys.bus();
         for (i, &(x, y, r)) in disks.iter().enumerate() {
-            let d = cspace::Disk {
-                x_um: x * 1000,
-                y_um: y * 1000,
-                r_um: r * 1000,
-            };
-            let im = cspace::images(&d).map_err(|e| format!("{e:?}"))?;
-            cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
+            crate::cspace_oracle::draw_disks_mm(&mut g, &[(x, y, r)])
+                .map_err(|e| format!("{e:?}"))?;
             let b = cspace::worklist::OBSTACLE_BEACONS[i] as usize;
             table.beacons[b] = Beacon {
                 x_um: x * 1000,

@@ -20,19 +20,7 @@ const OUT: u32 = 0x0009_0000;
 fn global_with(disks: &[(i32, i32, i32)]) -> Vec<u8> {
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
     vme_map::init_header(&mut ArrayBus::new(&mut global));
-    for &(x, y, r) in disks {
-        let d = cspace::Disk {
-            x_um: x * 1000,
-            y_um: y * 1000,
-            r_um: r * 1000,
-        };
-        let im = cspace::images(&d).unwrap();
-        cspace::apply(
-            &im,
-            &mut cspace::BusCanvas(&mut ArrayBus::new(&mut global)),
-            cspace::Op::Draw,
-        );
-    }
+    sim_host::cspace_oracle::draw_disks_mm(&mut ArrayBus::new(&mut global), disks).unwrap();
     global
 }
 

@@ -77,11 +77,6 @@ impl Board {
         self.shell.id()
     }
 
-    /// The planner's logic (for the host's pictures and tests).
-    pub fn planner(&self) -> &Planner {
-        &self.planner
-    }
-
     /// Puts the outputs in their safe state and waits for the global RAM header.
     pub fn boot(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
         safe(io);

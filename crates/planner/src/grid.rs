@@ -122,17 +122,6 @@ impl Grid {
     pub fn marked_row(&self, r: u32) -> &Row {
         &self.occ[(r & 127) as usize]
     }
-
-    /// Marks pixel `c` (tests and host tools that build a bitmap by hand); regrows the
-    /// blocked rows it touches.
-    pub fn mark(&mut self, c: [i32; 2]) {
-        let (r, w, m) = at(c);
-        self.occ[r][w] |= m;
-        let r = r as u32;
-        self.grow_row((r + 127) & 127);
-        self.grow_row(r);
-        self.grow_row((r + 1) & 127);
-    }
 }
 
 /// Reads the four words of the stripe layer.

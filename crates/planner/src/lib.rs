@@ -290,16 +290,6 @@ impl Planner {
         }
     }
 
-    /// The planner's bitmap of the map (for tests and the host).
-    pub fn grid(&self) -> &Grid {
-        &self.grid
-    }
-
-    /// The hit point in use (cells), when following a wall.
-    pub fn hit(&self) -> Option<[i32; 2]> {
-        (self.mode == Mode::Wall).then_some(self.hit)
-    }
-
     /// The goal in use: the chosen pose at the approach's image (absolute micro-radians).
     pub fn goal_urad(&self) -> Option<[i32; 2]> {
         self.has_goal.then(|| self.target())
