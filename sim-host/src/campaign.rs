@@ -250,6 +250,33 @@ pub struct Summary {
     pub wall_s: f64,
 }
 
+/// A campaign's collision figures.
+pub struct CollisionFigures {
+    /// Indices of the scenes with at least one contact.
+    pub scenes: Vec<u64>,
+    /// Separate contacts over all scenes.
+    pub contacts: u64,
+    /// Smallest clearance over all scenes, m.
+    pub min_clearance_m: f64,
+}
+
+/// The collision figures of scenes given as (index, contacts, smallest clearance in m).
+pub fn collision_figures(scenes: impl Iterator<Item = (u64, u64, f64)>) -> CollisionFigures {
+    let mut f = CollisionFigures {
+        scenes: Vec::new(),
+        contacts: 0,
+        min_clearance_m: f64::INFINITY,
+    };
+    for (index, contacts, clearance_m) in scenes {
+        if contacts > 0 {
+            f.scenes.push(index);
+        }
+        f.contacts += contacts;
+        f.min_clearance_m = f.min_clearance_m.min(clearance_m);
+    }
+    f
+}
+
 /// Runs `f(0..n)` on `threads` threads, each taking the next index in turn; calls
 /// `progress` after each. The results come in no particular order (campaigns sort them by
 /// index): which thread ran what does not change them.
@@ -304,27 +331,25 @@ pub fn campaign(
             times[((times.len() - 1) as f64 * p).round() as usize]
         }
     };
+    let hits = collision_figures(
+        results
+            .iter()
+            .map(|r| (r.index, r.collisions, r.min_clearance_m)),
+    );
     let summary = Summary {
         kind,
         seed,
         scenes: n,
         duration_s: kind.duration_s(),
-        scenes_with_collisions: results.iter().filter(|r| r.collisions > 0).count() as u64,
-        collisions: results.iter().map(|r| r.collisions).sum(),
-        min_clearance_m: results
-            .iter()
-            .map(|r| r.min_clearance_m)
-            .fold(f64::INFINITY, f64::min),
+        scenes_with_collisions: hits.scenes.len() as u64,
+        collisions: hits.contacts,
+        min_clearance_m: hits.min_clearance_m,
         goals_reached: times.len() as u64,
         time_to_goal_s: [q(0.5), q(0.95), q(1.0)],
         stalled: results.iter().filter(|r| r.stalled).count() as u64,
         scenes_with_escapes: results.iter().filter(|r| r.escape_ms > 0).count() as u64,
         scenes_with_holds: results.iter().filter(|r| r.hold_ms > 0).count() as u64,
-        collision_scenes: results
-            .iter()
-            .filter(|r| r.collisions > 0)
-            .map(|r| r.index)
-            .collect(),
+        collision_scenes: hits.scenes,
         wall_s: start.elapsed().as_secs_f64(),
     };
     (summary, results)

@@ -236,17 +236,9 @@ impl Oracle {
     }
 }
 
-/// The arm's acceleration limits, rad/s^2 (umax / I).
-pub fn accel_limits() -> [f64; 2] {
-    [
-        arm::LINK1.torque_limit_nm / arm::LINK1.inertia_kgm2,
-        arm::LINK2.torque_limit_nm / arm::LINK2.inertia_kgm2,
-    ]
-}
-
 /// The time to follow waypoints `w` (radians), at rest at both ends (module docs).
 pub fn time_estimate(w: &[[f64; 2]]) -> f64 {
-    let acc = accel_limits();
+    let acc = [arm::LINK1.max_accel_rad_s2(), arm::LINK2.max_accel_rad_s2()];
     let n = w.len();
     if n < 2 {
         return 0.0;
@@ -371,20 +363,25 @@ pub fn scene(seed: u64, index: u64) -> Scene {
     }
 }
 
-/// The goal's two poses for a wand at (`x`, `y`) (absolute angles in (-pi, pi]).
+/// The goal's two poses for a wand at (`x`, `y`) within reach (absolute angles): the
+/// calibration's inverse kinematics, and the same with the angles swapped (the links are
+/// equally long, so swapping them puts the tip at the same place, elbow the other way).
 pub fn poses(x: f64, y: f64) -> [[f64; 2]; 2] {
-    let l = arm::geometry::L1_M;
-    let r = x.hypot(y).min(2.0 * l);
-    let phi = y.atan2(x);
-    let beta = (r / (2.0 * l)).clamp(-1.0, 1.0).acos();
-    [[phi - beta, phi + beta], [phi + beta, phi - beta]]
+    let p = crate::sensing_cal::ik(x, y).expect("the wand is within the arm's reach");
+    [p, [p[1], p[0]]]
 }
 
+/// The pixel of angles `a` (unwrapped).
 fn cell(a: [f64; 2]) -> [i32; 2] {
     [
         (a[0] / PIX_RAD).floor() as i32,
         (a[1] / PIX_RAD).floor() as i32,
     ]
+}
+
+/// The centre of pixel `c`, rad.
+fn centre(c: &[i32; 2]) -> [f64; 2] {
+    [(c[0] as f64 + 0.5) * PIX_RAD, (c[1] as f64 + 0.5) * PIX_RAD]
 }
 
 /// What one scene did.
@@ -401,6 +398,10 @@ pub struct SceneResult {
     /// The oracle's path (cell centres, radians, unwrapped) for the pictures.
     #[serde(skip)]
     pub oracle_path: Vec<[f64; 2]>,
+    /// The map the oracle read (`[i2 * 128 + i1]`), kept only when the run was asked for
+    /// a picture's samples.
+    #[serde(skip)]
+    pub marked: Vec<bool>,
     /// Separate contacts between the arm and a disk.
     pub collisions: u64,
     /// Smallest clearance, m.
@@ -418,7 +419,7 @@ pub struct SceneResult {
     pub ran_s: f64,
 }
 
-/// Runs one scene; with `samples`, also the path for a picture.
+/// Runs one scene; with `samples`, also the path and the map for a picture.
 pub fn run_scene(s: &Scene, mut samples: Option<&mut Vec<crate::plots::Sample>>) -> SceneResult {
     let mut sim = Sim::new(s.config.clone());
     let per_ms = (1e-3 / sim.cfg.dt_s).round() as u64;
@@ -427,6 +428,7 @@ pub fn run_scene(s: &Scene, mut samples: Option<&mut Vec<crate::plots::Sample>>)
     let mut oracle_path_rad = None;
     let mut estimate_s = None;
     let mut oracle_path = Vec::new();
+    let mut marked = Vec::new();
     let mut first_request = None;
     let mut goal_time_s = None;
     let mut unreachable = None;
@@ -439,19 +441,18 @@ pub fn run_scene(s: &Scene, mut samples: Option<&mut Vec<crate::plots::Sample>>)
         }
         let t = sim.t_s();
         if class.is_none() && t >= ORACLE_AT_S {
-            let o = Oracle::new(&marked_pixels(&mut sim));
+            let m = marked_pixels(&mut sim);
+            let o = Oracle::new(&m);
+            if samples.is_some() {
+                marked = m;
+            }
             let start = cell(s.config.start_rad);
             let p = poses(wx, wy);
             let goals = [cell(p[0]), cell(p[1])];
             match o.astar(start, &goals) {
                 Some(path) => {
-                    let w: Vec<[f64; 2]> = o
-                        .shorten(&path)
-                        .iter()
-                        .map(|c| [(c[0] as f64 + 0.5) * PIX_RAD, (c[1] as f64 + 0.5) * PIX_RAD])
-                        .collect();
                     // From the start pose itself to the goal pose itself.
-                    let mut w = w;
+                    let mut w: Vec<[f64; 2]> = o.shorten(&path).iter().map(centre).collect();
                     w[0] = s.config.start_rad;
                     let last = *path.last().expect("a path");
                     let gp = if idx(last) == idx(goals[0]) {
@@ -468,10 +469,7 @@ pub fn run_scene(s: &Scene, mut samples: Option<&mut Vec<crate::plots::Sample>>)
                             .sum(),
                     );
                     estimate_s = Some(time_estimate(&w));
-                    oracle_path = path
-                        .iter()
-                        .map(|c| [(c[0] as f64 + 0.5) * PIX_RAD, (c[1] as f64 + 0.5) * PIX_RAD])
-                        .collect();
+                    oracle_path = path.iter().map(centre).collect();
                     class = Some(Class::Solvable);
                 }
                 None => {
@@ -531,6 +529,7 @@ pub fn run_scene(s: &Scene, mut samples: Option<&mut Vec<crate::plots::Sample>>)
         oracle_path_rad,
         estimate_s,
         oracle_path,
+        marked,
         collisions: sim.collisions.events,
         min_clearance_m: sim.collisions.min_clearance_m,
         goal_time_s,
@@ -622,38 +621,29 @@ pub fn campaign(
         .iter()
         .filter(|r| r.class == Class::Marginal)
         .collect();
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        if v.is_empty() {
-            f64::NAN
-        } else {
-            v[v.len() / 2]
-        }
-    };
-    let reached: Vec<&&SceneResult> = solv.iter().filter(|r| r.goal_time_s.is_some()).collect();
+    let reached: Vec<&SceneResult> = solv
+        .iter()
+        .copied()
+        .filter(|r| r.goal_time_s.is_some())
+        .collect();
+    let walls: Vec<&SceneResult> = reached.iter().copied().filter(|r| r.walls > 0).collect();
+    let [solvable_reached, solvable_reported_unreachable, solvable_undecided] = outcomes(&solv);
+    let [m_reached, m_reported, m_undecided] = outcomes(&marg);
+    let [time_to_goal_median_s, estimate_median_s, ratio_median] = medians(&reached);
+    let [walls_time_median_s, walls_estimate_median_s, walls_ratio_median] = medians(&walls);
+    let hits = crate::campaign::collision_figures(
+        results
+            .iter()
+            .map(|r| (r.index, r.collisions, r.min_clearance_m)),
+    );
     let summary = Summary {
         seed,
         scenes: n,
         solvable: solv.len() as u64,
-        solvable_reached: reached.len() as u64,
-        solvable_reported_unreachable: solv
-            .iter()
-            .filter(|r| r.goal_time_s.is_none() && r.unreachable.is_some())
-            .count() as u64,
-        solvable_undecided: solv
-            .iter()
-            .filter(|r| r.goal_time_s.is_none() && r.unreachable.is_none())
-            .count() as u64,
-        marginal: [
-            marg.len() as u64,
-            marg.iter().filter(|r| r.goal_time_s.is_some()).count() as u64,
-            marg.iter()
-                .filter(|r| r.goal_time_s.is_none() && r.unreachable.is_some())
-                .count() as u64,
-            marg.iter()
-                .filter(|r| r.goal_time_s.is_none() && r.unreachable.is_none())
-                .count() as u64,
-        ],
+        solvable_reached,
+        solvable_reported_unreachable,
+        solvable_undecided,
+        marginal: [marg.len() as u64, m_reached, m_reported, m_undecided],
         unsolvable: [
             uns.iter()
                 .filter(|r| r.class == Class::GoalInObstacle)
@@ -669,48 +659,18 @@ pub fn campaign(
             .iter()
             .filter_map(|r| r.unreachable.map(|u| u.0))
             .fold(0.0, f64::max),
-        scenes_with_collisions: results.iter().filter(|r| r.collisions > 0).count() as u64,
-        collisions: results.iter().map(|r| r.collisions).sum(),
-        min_clearance_m: results
-            .iter()
-            .map(|r| r.min_clearance_m)
-            .fold(f64::INFINITY, f64::min),
-        time_to_goal_median_s: median(reached.iter().filter_map(|r| r.goal_time_s).collect()),
-        estimate_median_s: median(reached.iter().filter_map(|r| r.estimate_s).collect()),
-        ratio_median: median(
-            reached
-                .iter()
-                .filter_map(|r| Some(r.goal_time_s? / r.estimate_s?.max(1e-3)))
-                .collect(),
-        ),
-        walls_ratio_median: median(
-            reached
-                .iter()
-                .filter(|r| r.walls > 0)
-                .filter_map(|r| Some(r.goal_time_s? / r.estimate_s?.max(1e-3)))
-                .collect(),
-        ),
-        walls_time_median_s: median(
-            reached
-                .iter()
-                .filter(|r| r.walls > 0)
-                .filter_map(|r| r.goal_time_s)
-                .collect(),
-        ),
-        walls_estimate_median_s: median(
-            reached
-                .iter()
-                .filter(|r| r.walls > 0)
-                .filter_map(|r| r.estimate_s)
-                .collect(),
-        ),
+        scenes_with_collisions: hits.scenes.len() as u64,
+        collisions: hits.contacts,
+        min_clearance_m: hits.min_clearance_m,
+        time_to_goal_median_s,
+        estimate_median_s,
+        ratio_median,
+        walls_ratio_median,
+        walls_time_median_s,
+        walls_estimate_median_s,
         scenes_with_walls: solv.iter().filter(|r| r.walls > 0).count() as u64,
         scenes_with_approach_changes: results.iter().filter(|r| r.approach > 0).count() as u64,
-        collision_scenes: results
-            .iter()
-            .filter(|r| r.collisions > 0)
-            .map(|r| r.index)
-            .collect(),
+        collision_scenes: hits.scenes,
         missed_scenes: solv
             .iter()
             .filter(|r| r.goal_time_s.is_none())
@@ -719,6 +679,34 @@ pub fn campaign(
         wall_s: start.elapsed().as_secs_f64(),
     };
     (summary, results)
+}
+
+/// How scenes ended: the goal reached; reported unreachable (and not reached); neither.
+fn outcomes(rs: &[&SceneResult]) -> [u64; 3] {
+    let count = |f: &dyn Fn(&SceneResult) -> bool| rs.iter().filter(|r| f(r)).count() as u64;
+    [
+        count(&|r| r.goal_time_s.is_some()),
+        count(&|r| r.goal_time_s.is_none() && r.unreachable.is_some()),
+        count(&|r| r.goal_time_s.is_none() && r.unreachable.is_none()),
+    ]
+}
+
+/// Medians over reached scenes `rs` of the time to goal, the oracle's estimate and their
+/// ratio (NaN for none).
+fn medians(rs: &[&SceneResult]) -> [f64; 3] {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    [
+        median(rs.iter().filter_map(|r| r.goal_time_s).collect()),
+        median(rs.iter().filter_map(|r| r.estimate_s).collect()),
+        median(
+            rs.iter()
+                .filter_map(|r| Some(r.goal_time_s? / r.estimate_s?.max(1e-3)))
+                .collect(),
+        ),
+    ]
 }
 
 /// A scenario file that replays scene `s` (`sim-host run`).
@@ -734,11 +722,6 @@ pub fn picture(seed: u64, i: u64, out: &Path) -> Result<SceneResult, String> {
     let s = scene(seed, i);
     let mut samples = Vec::new();
     let r = run_scene(&s, Some(&mut samples));
-    let mut sim = Sim::new(s.config.clone());
-    while sim.t_s() < ORACLE_AT_S {
-        sim.step();
-    }
-    let marked = marked_pixels(&mut sim);
     let disks: Vec<Disk> = s.config.obstacles.iter().map(|o| o.start).collect();
     let exact = crate::run::exact_pixels(&disks);
     let (wx, wy) = s.config.wand.at(0.0).expect("a wand");
@@ -761,7 +744,7 @@ pub fn picture(seed: u64, i: u64, out: &Path) -> Result<SceneResult, String> {
         &out.join(format!("scene-{i}.png")),
         &format!("planner scene {i}: {outcome}{est}"),
         &crate::plots::PathPicture {
-            marked: &marked,
+            marked: &r.marked,
             exact: &exact,
             goal: Some(goal),
             oracle: &r.oracle_path,
