@@ -472,13 +472,7 @@ impl Planner {
 
     /// The pose to go for: one the last settled fill reached, else the nearest.
     fn pick_pose(&self, poses: &[[i32; 2]; 2], theta: [i32; 2]) -> usize {
-        let near = goal::choose(*poses, theta);
-        let first = usize::from(
-            near != [
-                goal::nearest(poses[0][0], theta[0]),
-                goal::nearest(poses[0][1], theta[1]),
-            ],
-        );
+        let first = (goal::second_nearer(*poses, theta) & 1) as usize;
         let other = 1 - first;
         if self.score(poses[other]) > self.score(poses[first]) {
             other

@@ -49,13 +49,20 @@ pub fn nearest(a: i32, near: i32) -> i32 {
     near + wrap(a - near)
 }
 
+/// -1 when the second of the poses `p` is nearer `near` on the torus than the first (the
+/// larger of the two axis distances decides), else 0.
+pub fn second_nearer(p: [[i32; 2]; 2], near: [i32; 2]) -> i32 {
+    use crate::masks::{abs, max};
+    let d = |q: [i32; 2]| max(abs(wrap(q[0] - near[0])), abs(wrap(q[1] - near[1])));
+    (d(p[1]) - d(p[0])) >> 31
+}
+
 /// Of the two poses `p`, the one nearer `near` on the torus (the larger of the two axis
 /// distances decides), expressed nearest `near` on each axis.
 pub fn choose(p: [[i32; 2]; 2], near: [i32; 2]) -> [i32; 2] {
-    use crate::masks::{abs, max, pick};
-    let d = |q: [i32; 2]| max(abs(wrap(q[0] - near[0])), abs(wrap(q[1] - near[1])));
+    use crate::masks::pick;
     // -1 when the second pose is nearer.
-    let second = (d(p[1]) - d(p[0])) >> 31;
+    let second = second_nearer(p, near);
     let q = [
         pick(second, p[1][0], p[0][0]),
         pick(second, p[1][1], p[0][1]),
