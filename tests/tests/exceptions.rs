@@ -9,8 +9,8 @@ use vme_map::{BoardId, BoardState, FaultCode};
 
 fn planted(words: &[u16]) -> (System, u32) {
     let mut sys = System::power_up(&images_dir(), &[BoardId::Planner]).unwrap();
-    // Running: past the runtime's start-up (the planner copies 14 KiB of state first, 2.7
-    // ms: `sim-host boot planner`).
+    // Running: past the runtime's start-up (the planner copies 14 KiB of state first, under
+    // 3 ms: `sim-host boot planner`).
     sys.run_ms(4.0);
     assert!(sys.heartbeat(BoardId::Planner) > 0, "the planner runs");
     let b = &mut sys.boards[0];
