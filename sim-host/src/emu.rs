@@ -43,8 +43,59 @@ pub struct BoardBus<'a> {
     pub global: &'a mut [u8],
     /// Private I/O.
     pub io: &'a mut dyn Device,
-    /// CPU cycle at the start of the current instruction.
+    /// Cycle of the system clock at the start of the current instruction (what the devices
+    /// see as the time).
     pub now: u64,
+    /// Global-RAM address of the board's heartbeat: a long written there ends a main-loop
+    /// pass (the shell's `end`), timed into `beats`.
+    pub beat_addr: u32,
+    /// Main-loop pass timing.
+    pub beats: &'a mut LoopStats,
+}
+
+/// Main-loop pass timing of an emulated board, from the system-clock cycles at which it
+/// wrote its heartbeat: the loop period as the real board would run it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoopStats {
+    /// Cycle of the last heartbeat write.
+    pub last_beat: Option<u64>,
+    /// Periods measured (heartbeat to heartbeat).
+    pub periods: u64,
+    /// Shortest period (cycles).
+    pub min_cycles: u64,
+    /// Longest period (cycles).
+    pub max_cycles: u64,
+    /// Sum of the periods (cycles).
+    pub sum_cycles: u64,
+}
+
+impl LoopStats {
+    fn beat(&mut self, now: u64) {
+        if let Some(last) = self.last_beat {
+            let p = now - last;
+            if self.periods == 0 {
+                self.min_cycles = p;
+            }
+            self.min_cycles = self.min_cycles.min(p);
+            self.max_cycles = self.max_cycles.max(p);
+            self.sum_cycles += p;
+            self.periods += 1;
+        }
+        self.last_beat = Some(now);
+    }
+
+    /// (min, mean, max) loop period in microseconds at [`CPU_HZ`]; `None` before two
+    /// heartbeats.
+    pub fn period_us(&self) -> Option<(f64, f64, f64)> {
+        let us = |c: f64| c * 1e6 / CPU_HZ as f64;
+        (self.periods > 0).then(|| {
+            (
+                us(self.min_cycles as f64),
+                us(self.sum_cycles as f64 / self.periods as f64),
+                us(self.max_cycles as f64),
+            )
+        })
+    }
 }
 
 fn fault(address: u32) -> BusFault {
@@ -149,6 +200,9 @@ impl AddressBus for BoardBus<'_> {
         self.io_write16(a, v)
     }
     fn try_write_long(&mut self, a: u32, v: u32) -> Result<(), BusFault> {
+        if a == self.beat_addr {
+            self.beats.beat(self.now);
+        }
         if let Some(m) = self.mem(a, 4) {
             m.copy_from_slice(&v.to_be_bytes());
             return Ok(());
@@ -176,7 +230,7 @@ pub struct EmuBoard {
     pub cpu: CpuCore,
     /// Local RAM.
     pub ram: Vec<u8>,
-    /// Private I/O devices.
+    /// Private I/O devices (a simulation can lend the board its own instead: [`Self::run_until`]).
     pub io: Box<dyn Device>,
     /// CPU cycles executed since reset.
     pub cycles: u64,
@@ -184,11 +238,32 @@ pub struct EmuBoard {
     pub instructions: u64,
     /// Whether it still runs.
     pub state: RunState,
+    /// The system clock (cycles) at which this board left reset: the devices see
+    /// `t0 + cycles` as the time.
+    pub t0: u64,
+    /// Main-loop pass timing (heartbeat writes).
+    pub beats: LoopStats,
+    /// The top of the stack (the image's `_stack_top`), if the image names it.
+    pub stack_top: Option<u32>,
+    /// The lowest stack pointer seen after an instruction since reset (the stack's
+    /// high-water mark; local RAM is left as loaded, so nothing the firmware reads changes).
+    pub lowest_sp: u32,
+}
+
+/// Why [`EmuBoard::run_until`] returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// The board reached the cycle asked for.
+    Reached,
+    /// The CPU halted.
+    Halted,
+    /// The next instruction is at a breakpoint.
+    Breakpoint,
 }
 
 impl EmuBoard {
-    /// Loads `image` into a fresh board's local RAM and resets the CPU (which fetches the
-    /// initial stack pointer and PC from the image's vector table).
+    /// Loads `image` into a fresh board's local RAM and resets the CPU
+    /// (which fetches the initial stack pointer and PC from the image's vector table).
     pub fn new(id: BoardId, image: &Image, io: Box<dyn Device>, global: &mut [u8]) -> Self {
         let mut cpu = CpuCore::new();
         cpu.set_cpu_type(CpuType::M68020);
@@ -196,22 +271,30 @@ impl EmuBoard {
         // section 6), so the boards are modelled without a coprocessor: a stray 68881
         // instruction takes the line-F exception instead of running on absent hardware.
         cpu.fpu_present = false;
+        let ram = image.to_ram();
         let mut b = Self {
             id,
             cpu,
-            ram: image.to_ram(),
+            ram,
             io,
             cycles: 0,
             instructions: 0,
             state: RunState::Running,
+            t0: 0,
+            beats: LoopStats::default(),
+            stack_top: image.symbol("_stack_top"),
+            lowest_sp: u32::MAX,
         };
         let mut bus = BoardBus {
             ram: &mut b.ram,
             global,
             io: &mut *b.io,
             now: 0,
+            beat_addr: beat_addr(id),
+            beats: &mut b.beats,
         };
         b.cpu.reset(&mut bus);
+        b.lowest_sp = b.cpu.dar[15];
         b
     }
 
@@ -219,72 +302,122 @@ impl EmuBoard {
     /// until the CPU halts. Returns the cycles consumed.
     pub fn run(&mut self, global: &mut [u8], budget: u64) -> u64 {
         let start = self.cycles;
-        while self.state == RunState::Running && self.cycles - start < budget {
-            let left = (budget - (self.cycles - start)).min(i32::MAX as u64) as i32;
+        self.run_until(global, None, start + budget, &[]);
+        self.cycles - start
+    }
+
+    /// Runs until the board's cycle count reaches `until` (whole instructions), the CPU
+    /// halts, or the next instruction is at one of `breaks` (the instruction at the PC
+    /// when called is executed even if it is one). `io` lends the board devices owned by
+    /// a simulation instead of its own.
+    pub fn run_until(
+        &mut self,
+        global: &mut [u8],
+        mut io: Option<&mut dyn Device>,
+        until: u64,
+        breaks: &[u32],
+    ) -> Stop {
+        let beat_addr = beat_addr(self.id);
+        let mut first = true;
+        while self.state == RunState::Running && self.cycles < until {
+            let left = (until - self.cycles).min(i32::MAX as u64) as i32;
+            let dev: &mut dyn Device = match io.as_deref_mut() {
+                Some(d) => d,
+                None => &mut *self.io,
+            };
             let mut bus = BoardBus {
                 ram: &mut self.ram,
                 global: &mut *global,
-                io: &mut *self.io,
-                now: self.cycles,
+                io: dev,
+                now: self.t0 + self.cycles,
+                beat_addr,
+                beats: &mut self.beats,
             };
-            let r = self
-                .cpu
-                .run_for_cycles_with_hook(&mut bus, left, |_, bus, c| {
-                    bus.now += c as u64;
-                    m68k::CycleBatchControl::Continue
-                });
+            if !first && breaks.contains(&self.cpu.pc) {
+                return Stop::Breakpoint;
+            }
+            first = false;
+            let sp = &mut self.lowest_sp;
+            let r = if breaks.is_empty() {
+                self.cpu
+                    .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
+                        bus.now += c as u64;
+                        *sp = (*sp).min(cpu.dar[15]);
+                        m68k::CycleBatchControl::Continue
+                    })
+            } else {
+                self.cpu
+                    .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
+                        bus.now += c as u64;
+                        *sp = (*sp).min(cpu.dar[15]);
+                        if breaks.contains(&cpu.pc) {
+                            m68k::CycleBatchControl::Return
+                        } else {
+                            m68k::CycleBatchControl::Continue
+                        }
+                    })
+            };
             self.cycles += r.cycles.max(0) as u64;
             self.instructions += r.instructions as u64;
-            self.take_surfaced(r.exit, global);
+            bus.now = self.t0 + self.cycles;
+            let (c, halted) = take_surfaced(&mut self.cpu, &mut bus, r.exit);
+            self.cycles += c;
+            if halted {
+                self.state = RunState::Halted;
+            }
+            if !breaks.is_empty() && breaks.contains(&self.cpu.pc) && self.cycles < until {
+                return Stop::Breakpoint;
+            }
         }
-        self.cycles - start
+        if self.state == RunState::Halted {
+            Stop::Halted
+        } else {
+            Stop::Reached
+        }
     }
 
     /// Executes one instruction (or exception entry). Returns its cycles.
     pub fn step(&mut self, global: &mut [u8]) -> u64 {
+        self.step_with(global, None)
+    }
+
+    /// [`Self::step`] with devices lent by a simulation (see [`Self::run_until`]).
+    pub fn step_with(&mut self, global: &mut [u8], io: Option<&mut dyn Device>) -> u64 {
         if self.state != RunState::Running {
             return 0;
         }
         let before = self.cycles;
+        let dev: &mut dyn Device = match io {
+            Some(d) => d,
+            None => &mut *self.io,
+        };
         let mut bus = BoardBus {
             ram: &mut self.ram,
             global: &mut *global,
-            io: &mut *self.io,
-            now: self.cycles,
+            io: dev,
+            now: self.t0 + self.cycles,
+            beat_addr: beat_addr(self.id),
+            beats: &mut self.beats,
         };
         let r = self.cpu.run_for_cycles(&mut bus, 1);
         self.cycles += r.cycles.max(0) as u64;
         self.instructions += r.instructions as u64;
-        self.take_surfaced(r.exit, global);
+        self.lowest_sp = self.lowest_sp.min(self.cpu.dar[15]);
+        bus.now = self.t0 + self.cycles;
+        let (c, halted) = take_surfaced(&mut self.cpu, &mut bus, r.exit);
+        self.cycles += c;
+        if halted {
+            self.state = RunState::Halted;
+        }
         self.cycles - before
     }
 
-    /// Takes, as the hardware would, a trap the core surfaced without taking.
-    fn take_surfaced(&mut self, exit: CycleBatchExit, global: &mut [u8]) {
-        let mut bus = BoardBus {
-            ram: &mut self.ram,
-            global,
-            io: &mut *self.io,
-            now: self.cycles,
-        };
-        let c = match exit {
-            CycleBatchExit::BudgetExhausted | CycleBatchExit::BoundaryRequested => 0,
-            CycleBatchExit::Stopped => {
-                // Nothing raises interrupts on these boards, so STOP never wakes.
-                self.state = RunState::Halted;
-                0
-            }
-            CycleBatchExit::AlineTrap { .. } => self.cpu.take_aline_exception(&mut bus),
-            CycleBatchExit::FlineTrap { .. } => self.cpu.take_fline_exception(&mut bus),
-            CycleBatchExit::TrapInstruction { trap_num } => {
-                self.cpu.take_trap_exception(&mut bus, trap_num)
-            }
-            CycleBatchExit::Breakpoint { .. } => self.cpu.take_bkpt_exception(&mut bus),
-            CycleBatchExit::IllegalInstruction { .. } => self.cpu.take_illegal_exception(&mut bus),
-        };
-        self.cycles += c.max(0) as u64;
+    /// The deepest the stack has reached since reset, in bytes below `_stack_top` (the
+    /// lowest stack pointer after any instruction; an exception frame counts), if the
+    /// image names its stack top.
+    pub fn stack_high_water(&self) -> Option<u32> {
+        Some(self.stack_top?.saturating_sub(self.lowest_sp))
     }
-
     /// Calls the C-ABI function at `addr` with 32-bit `args` on the board's own stack and
     /// runs it until it returns (or `max_cycles` pass, or the CPU halts). Returns d0 and the
     /// cycles the call took. For unit tests that step one firmware function at a time.
@@ -324,4 +457,25 @@ impl EmuBoard {
     pub fn micros(&self) -> f64 {
         self.cycles as f64 * 1e6 / CPU_HZ as f64
     }
+}
+
+/// The global-RAM address of `id`'s heartbeat, as the board's CPU addresses it.
+fn beat_addr(id: BoardId) -> u32 {
+    GLOBAL_RAM_BASE + vme_map::BoardSlot::of(id).heartbeat()
+}
+
+/// Takes, as the hardware would, a trap the core surfaced without taking. Returns the
+/// cycles of the exception entry and whether the CPU halted.
+fn take_surfaced(cpu: &mut CpuCore, bus: &mut BoardBus, exit: CycleBatchExit) -> (u64, bool) {
+    let c = match exit {
+        CycleBatchExit::BudgetExhausted | CycleBatchExit::BoundaryRequested => 0,
+        // Nothing raises interrupts on these boards, so STOP never wakes.
+        CycleBatchExit::Stopped => return (0, true),
+        CycleBatchExit::AlineTrap { .. } => cpu.take_aline_exception(bus),
+        CycleBatchExit::FlineTrap { .. } => cpu.take_fline_exception(bus),
+        CycleBatchExit::TrapInstruction { trap_num } => cpu.take_trap_exception(bus, trap_num),
+        CycleBatchExit::Breakpoint { .. } => cpu.take_bkpt_exception(bus),
+        CycleBatchExit::IllegalInstruction { .. } => cpu.take_illegal_exception(bus),
+    };
+    (c.max(0) as u64, false)
 }

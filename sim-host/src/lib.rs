@@ -25,6 +25,7 @@ pub mod cspace_oracle;
 pub mod devices;
 pub mod docs;
 pub mod emu;
+pub mod gdb;
 pub mod image;
 pub mod optics;
 pub mod planner_bench;

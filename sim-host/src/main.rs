@@ -20,12 +20,37 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// How a run executes the boards.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Mode {
+    /// The boards' crates compiled for the host, at their set rates.
+    Native,
+    /// The real images on emulated 68020s at 16.7 MHz.
+    Image,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
-    /// Run a scenario in native mode and write its run directory (trace.csv, summary.json, PNGs).
+    /// Run a scenario and write its run directory (trace.csv, summary.json, PNGs): natively
+    /// (`--mode native`, the boards' crates on the host at their set rates) or as the real
+    /// images on emulated 68020s at 16.7 MHz (`--mode image`, the loop rates the code
+    /// reaches), optionally serving GDB for one board (`--gdb servo:1234`).
     Run {
         /// The scenario file (TOML; docs/scenarios.md).
         scenario: PathBuf,
+        /// native or image.
+        #[arg(long, value_enum, default_value_t = Mode::Native)]
+        mode: Mode,
+        /// Image mode: directory holding `<board>.elf` (written by `cargo xtask images`).
+        #[arg(long)]
+        images: Option<PathBuf>,
+        /// Image mode: only these boards (comma-separated) as images, the others native.
+        #[arg(long, value_delimiter = ',')]
+        image_boards: Vec<String>,
+        /// Image mode: serve the GDB remote protocol for `<board>:<port>` on 127.0.0.1 and
+        /// wait for GDB before the run starts (e.g. `reflex:1234`; port 0 picks a free one).
+        #[arg(long)]
+        gdb: Option<String>,
         /// Run directory to write.
         #[arg(long, default_value = "out/run")]
         out: PathBuf,
@@ -158,6 +183,10 @@ fn main() -> ExitCode {
             out,
             quiet,
             trace_every_us,
+            mode,
+            images,
+            image_boards,
+            gdb,
         } => {
             let sc = match Scenario::load(&scenario) {
                 Ok(s) => s,
@@ -174,11 +203,37 @@ fn main() -> ExitCode {
                 );
                 return ExitCode::from(2);
             }
+            let gdb = match gdb.as_deref().map(sim_host::gdb::parse_spec).transpose() {
+                Ok(g) => g,
+                Err(e) => {
+                    eprintln!("sim-host: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            if mode == Mode::Native
+                && (images.is_some() || gdb.is_some() || !image_boards.is_empty())
+            {
+                eprintln!("sim-host: --images, --image-boards and --gdb need --mode image");
+                return ExitCode::from(2);
+            }
+            let mut which = Vec::new();
+            for b in &image_boards {
+                match parse_board(b) {
+                    Some(id) => which.push(id),
+                    None => {
+                        eprintln!("sim-host: --image-boards: no board {b} ({BOARD_NAMES})");
+                        return ExitCode::from(2);
+                    }
+                }
+            }
             let opts = RunOptions {
                 trace_every: steps.round() as u64,
                 quiet,
+                images: (mode == Mode::Image).then(|| images.unwrap_or_else(default_images_dir)),
+                image_boards: which,
+                gdb,
             };
-            match run_to_dir(&sc, &out, opts) {
+            match run_to_dir(&sc, &out, &opts) {
                 Ok(s) => {
                     println!(
                         "{}: {:.3} s simulated in {:.3} s ({:.0}x real time); collisions {}; min clearance {}; goal {}",
@@ -190,6 +245,23 @@ fn main() -> ExitCode {
                         s.min_clearance_m.map_or("-".into(), |c| format!("{:.1} mm", c * 1e3)),
                         s.goal_reached.map_or("-".into(), |g| if g { "reached".into() } else { format!("not reached ({:.1} mm off)", s.final_goal_error_m.unwrap_or(0.0) * 1e3) })
                     );
+                    if s.mode == "image" {
+                        println!("board      loop min/mean/max (us at 16.7 MHz)   rate Hz  budget us  share  stack B  state");
+                        for b in &s.boards {
+                            println!(
+                                "{:<10} {:>9.1} {:>9.1} {:>9.1}          {:>8.0} {:>10.0} {:>6.2} {:>8} {}",
+                                b.board,
+                                b.loop_min_us.unwrap_or(f64::NAN),
+                                b.loop_mean_us.unwrap_or(f64::NAN),
+                                b.loop_max_us.unwrap_or(f64::NAN),
+                                b.rate_hz,
+                                b.period_us,
+                                b.budget_share.unwrap_or(f64::NAN),
+                                b.stack_bytes.map_or("-".into(), |x| x.to_string()),
+                                b.state
+                            );
+                        }
+                    }
                     println!(
                         "wrote trace.csv, summary.json, joints.png, task.png and cspace.png to {}",
                         out.display()

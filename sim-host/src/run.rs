@@ -12,17 +12,25 @@ use crate::scenario::Scenario;
 use crate::sim::Sim;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
-use vme_map::{BoardSlot, GlobalBus};
+use vme_map::{BoardId, BoardSlot, GlobalBus};
 
 /// How a run is carried out.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct RunOptions {
     /// Trace interval in plant steps.
     pub trace_every: u64,
     /// No progress bar.
     pub quiet: bool,
+    /// Image mode: the directory holding the board images (`<board>.elf`); native mode
+    /// when `None`.
+    pub images: Option<PathBuf>,
+    /// Image mode: only these boards as images, the others native (all when empty).
+    pub image_boards: Vec<BoardId>,
+    /// Image mode: serve the GDB remote protocol for this board on this TCP port of
+    /// 127.0.0.1 (0: any free port), waiting for GDB before the run starts.
+    pub gdb: Option<(BoardId, u16)>,
 }
 
 impl Default for RunOptions {
@@ -30,6 +38,9 @@ impl Default for RunOptions {
         Self {
             trace_every: 20,
             quiet: false,
+            images: None,
+            image_boards: Vec::new(),
+            gdb: None,
         }
     }
 }
@@ -39,8 +50,21 @@ impl Default for RunOptions {
 pub struct BoardSummary {
     /// Board name.
     pub board: String,
-    /// Configured main-loop period.
+    /// Native mode: the configured main-loop period. Image mode: the budget, the period
+    /// the board's issue asks for (its native period), against which `budget_share` is
+    /// measured.
     pub period_us: f64,
+    /// Image mode: shortest main-loop period measured on the emulated 68020 at 16.7 MHz.
+    pub loop_min_us: Option<f64>,
+    /// Image mode: mean main-loop period.
+    pub loop_mean_us: Option<f64>,
+    /// Image mode: longest main-loop period.
+    pub loop_max_us: Option<f64>,
+    /// Image mode: mean period over the budget (`period_us`); above 1, the board runs
+    /// slower than its issue asks.
+    pub budget_share: Option<f64>,
+    /// Image mode: the stack's high-water mark (bytes).
+    pub stack_bytes: Option<u32>,
     /// Main-loop passes run.
     pub polls: u64,
     /// Passes per simulated second.
@@ -58,6 +82,9 @@ pub struct BoardSummary {
 pub struct Summary {
     /// Scenario name.
     pub scenario: String,
+    /// `native` (the boards' crates on the host) or `image` (the images on emulated
+    /// 68020s).
+    pub mode: String,
     /// Seed.
     pub seed: u64,
     /// Simulated seconds.
@@ -213,15 +240,52 @@ pub fn exact_pixels(disks: &[arm::geometry::Disk]) -> Vec<bool> {
 }
 
 /// Runs `scenario`; returns the trace text and the summary.
-pub fn run(scenario: &Scenario, opts: RunOptions) -> (String, Summary) {
-    let (trace, summary, _, _) = run_sampled(scenario, opts);
-    (trace, summary)
+pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<(String, Summary), String> {
+    let (trace, summary, _, _) = run_sampled(scenario, opts)?;
+    Ok((trace, summary))
+}
+
+/// Powers up the simulation of `scenario` in the mode `opts` asks for (and waits for GDB if
+/// asked).
+pub fn power_up(scenario: &Scenario, opts: &RunOptions) -> Result<Sim, String> {
+    let mut sim = match &opts.images {
+        None => {
+            if opts.gdb.is_some() {
+                return Err("--gdb needs image mode (--mode image)".into());
+            }
+            Sim::new(scenario.config.clone())
+        }
+        Some(dir) => if opts.image_boards.is_empty() {
+            Sim::with_images(scenario.config.clone(), dir)
+        } else {
+            Sim::with_some_images(scenario.config.clone(), dir, &opts.image_boards)
+        }
+        .map_err(|e| format!("{e} (build the images with `cargo xtask images`)"))?,
+    };
+    if let Some((board, port)) = opts.gdb {
+        if sim.emu_board(board).is_none() {
+            return Err(format!("--gdb: no board {} in this scenario", board.name()));
+        }
+        let server = crate::gdb::Server::listen(board, port, |p| {
+            eprintln!(
+                "sim-host: waiting for GDB on 127.0.0.1:{p} for board {} (gdb-multiarch {}.elf -ex 'target remote :{p}')",
+                board.name(),
+                crate::boot::image_name(board)
+            )
+        })
+        .map_err(|e| format!("--gdb: port {port}: {e}"))?;
+        sim.attach_debugger(server);
+    }
+    Ok(sim)
 }
 
 /// Runs `scenario`; returns the trace text, the summary, the plot samples and the
 /// simulation as it ended.
-pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, Vec<Sample>, Sim) {
-    let mut sim = Sim::new(scenario.config.clone());
+pub fn run_sampled(
+    scenario: &Scenario,
+    opts: &RunOptions,
+) -> Result<(String, Summary, Vec<Sample>, Sim), String> {
+    let mut sim = power_up(scenario, opts)?;
     let total = (scenario.config.duration_s / scenario.config.dt_s).round() as u64;
     // The bar appears only once a run has taken more than a second of wall time.
     let bar = indicatif::ProgressBar::with_draw_target(
@@ -249,8 +313,9 @@ pub fn run_sampled(scenario: &Scenario, opts: RunOptions) -> (String, Summary, V
     }
     bar.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
+    sim.detach_debugger();
     let summary = summarize(scenario, &mut sim, wall_s);
-    (trace, summary, samples, sim)
+    Ok((trace, summary, samples, sim))
 }
 
 /// The state of the world at the end of a run, for the C-space picture.
@@ -296,9 +361,18 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
         .map(|s| {
             let slot = BoardSlot::of(s.board);
             let st = slot.status_word(&mut g);
+            let (lo, mean, hi) = match s.loop_us {
+                Some((a, b, c)) => (Some(a), Some(b), Some(c)),
+                None => (None, None, None),
+            };
             BoardSummary {
                 board: s.board.name().into(),
                 period_us: s.period_s * 1e6,
+                loop_min_us: lo,
+                loop_mean_us: mean,
+                loop_max_us: hi,
+                budget_share: mean.map(|m| m / (s.period_s * 1e6)),
+                stack_bytes: s.stack_bytes,
                 polls: s.polls,
                 rate_hz: s.polls as f64 / t,
                 heartbeat: g.read_u32(slot.heartbeat()),
@@ -310,6 +384,7 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
     let c = sim.collisions;
     Summary {
         scenario: scenario.name.clone(),
+        mode: if sim.image_mode() { "image" } else { "native" }.into(),
         seed: sim.cfg.seed,
         duration_s: t,
         plant_dt_us: sim.cfg.dt_s * 1e6,
@@ -327,10 +402,10 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
 
 /// Runs `scenario` and writes `trace.csv`, `summary.json`, `joints.png`, `task.png` and
 /// `cspace.png` into `out`.
-pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: RunOptions) -> Result<Summary, String> {
+pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: &RunOptions) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
     std::fs::create_dir_all(out).map_err(io)?;
-    let (trace, summary, samples, mut sim) = run_sampled(scenario, opts);
+    let (trace, summary, samples, mut sim) = run_sampled(scenario, opts)?;
     // The exact image of the obstacles is costly (an oracle verdict per pixel): only for
     // the picture.
     let end = End::of(&mut sim);
@@ -385,13 +460,14 @@ mod tests {
         let opts = RunOptions {
             trace_every: 1,
             quiet: true,
+            ..Default::default()
         };
-        let (a, _) = run(&scenario(5), opts);
-        let (b, _) = run(&scenario(5), opts);
+        let (a, _) = run(&scenario(5), &opts).unwrap();
+        let (b, _) = run(&scenario(5), &opts).unwrap();
         assert_eq!(hash(&a), hash(&b));
         assert_eq!(a, b);
         // Another seed changes the boards' phases, which the heartbeat columns show.
-        let (c, _) = run(&scenario(6), opts);
+        let (c, _) = run(&scenario(6), &opts).unwrap();
         assert_ne!(hash(&a), hash(&c));
         assert_eq!(a.lines().count(), 1 + 1 + 4000);
     }
@@ -400,11 +476,12 @@ mod tests {
     fn the_summary_reports_the_run() {
         let (_, s) = run(
             &scenario(1),
-            RunOptions {
+            &RunOptions {
                 quiet: true,
                 ..Default::default()
             },
-        );
+        )
+        .unwrap();
         assert_eq!(s.plant_steps, 4000);
         assert_eq!(s.boards.len(), 5);
         assert!(s.boards.iter().all(|b| b.state == "Running"));

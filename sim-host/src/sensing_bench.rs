@@ -369,7 +369,10 @@ pub fn timing(seed: u64) -> Timing {
         if seen.insert(b.t_us) {
             // The board's clock counts from its first slot; the host polls every 50 us.
             let published_at_us = sim.t_s() * 1e6;
-            let strobe_us = b.t_us as f64 + sim.sensing_clock_offset_us();
+            let strobe_us = b.t_us as f64
+                + sim
+                    .sensing_clock_offset_us()
+                    .expect("the sensing bench runs native");
             worst = worst.max(published_at_us - strobe_us);
         }
     }

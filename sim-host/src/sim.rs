@@ -1,7 +1,12 @@
-//! The deterministic simulation in native mode (design.md sections 3, 5 and 7).
+//! The deterministic simulation, native or image mode (design.md sections 3, 5 and 7).
 //!
-//! The boards' own code (each board crate's I/O shell and logic) runs on the host at each
-//! board's rate and seeded phase, asynchronously. Boards meet only in a simulated global
+//! In native mode the boards' own code (each board crate's I/O shell and logic) runs on the
+//! host at each board's rate and seeded phase, asynchronously. In image mode each board is
+//! its real image on an emulated 68020 ([`crate::emu`]) advanced by cycles at 16.7 MHz
+//! against the plant's clock, leaving reset at a seeded skew of up to
+//! [`RESET_SKEW_US`]; the boards are interleaved in slices of [`IMAGE_SLICE_CYCLES`] so that
+//! no writer stalls mid-record for longer than the hardware would, and each runs as fast as
+//! its code lets it (its loop period is measured, not set). Boards meet only in a simulated global
 //! RAM laid out by `vme-map`, the same bytes the images see. Their private I/O goes through
 //! the same register protocol and the same device models as image mode. The plant integrates
 //! at a fixed step, and the collision oracle checks the arm's true outline against every
@@ -14,12 +19,14 @@
 //! the collision oracle runs. A seed fixes every random choice, so a run is bit-identical.
 
 use crate::devices::{IdOnly, MotorSample, SensingIo, ServoIo};
-use crate::emu::{Device, CPU_HZ};
+use crate::emu::{Device, EmuBoard, RunState, Stop, CPU_HZ};
+use crate::image::{Image, ImageError};
 use crate::optics::{Camera, OpticsConfig};
 use crate::plant::{Plant, DEFAULT_DT_S};
 use arm::geometry::{Disk, Pose};
 use regs::IoBus;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::Path;
 use vme_map::{ArrayBus, BoardId, FaultCode, FaultRecord, GlobalBus, GLOBAL_RAM_SIZE};
 
 /// SplitMix64: a small, fast, seedable generator; the simulation's only source of randomness.
@@ -223,6 +230,20 @@ pub enum FaultKind {
     BusError,
 }
 
+/// The longest an image board's reset release trails power-up (seeded per board).
+pub const RESET_SKEW_US: f64 = 20.0;
+
+/// How far (CPU cycles, 10 us at 16.7 MHz) one image board runs before the next takes its
+/// turn within a plant step. The boards run in parallel on the real bus; a slice much longer
+/// than a record write would let a reader meet a record torn for a whole slice.
+pub const IMAGE_SLICE_CYCLES: u64 = 167;
+
+/// A board's code: its crate run natively, or its image on an emulated 68020.
+enum Code {
+    Native(Native),
+    Image(Box<EmuBoard>),
+}
+
 /// One board's code, run natively.
 enum Native {
     Sensing(Box<board_sensing::Board>),
@@ -289,7 +310,7 @@ impl IoBus for NativeIo<'_> {
 /// A board in the schedule.
 struct Slot {
     id: BoardId,
-    code: Native,
+    code: Code,
     own_io: Option<IdOnly>,
     period_s: f64,
     next_s: f64,
@@ -304,10 +325,18 @@ pub struct BoardStats {
     pub board: BoardId,
     /// Main-loop passes run.
     pub polls: u64,
-    /// Configured period.
+    /// Configured period (native mode); the loop-period budget the board's issue sets
+    /// (image mode, where the period is the code's own).
     pub period_s: f64,
     /// Whether it was halted by a fault.
     pub halted: bool,
+    /// Image mode: (min, mean, max) main-loop period in microseconds at 16.7 MHz, from the
+    /// cycles at which the image wrote its heartbeat.
+    pub loop_us: Option<(f64, f64, f64)>,
+    /// Image mode: the stack's high-water mark (bytes).
+    pub stack_bytes: Option<u32>,
+    /// Image mode: CPU cycles executed.
+    pub cycles: Option<u64>,
 }
 
 /// Collision figures from the oracle.
@@ -345,12 +374,36 @@ pub struct Sim {
     /// Obstacle disks at the current time (computed once per step, used by the oracle at
     /// the end of a step and by the beacons at the start of the next).
     disks: Vec<Disk>,
+    /// A GDB remote-protocol server on one image board (`--gdb`).
+    debugger: Option<crate::gdb::Server>,
 }
 
 impl Sim {
-    /// Powers the system up: global RAM cleared with its header, every board booted at a
-    /// seeded phase within its period, the arm at rest at its start angles.
+    /// Powers the system up in native mode: global RAM cleared with its header, every board
+    /// booted at a seeded phase within its period, the arm at rest at its start angles.
     pub fn new(cfg: Config) -> Self {
+        Self::build(cfg, None).expect("native mode loads no image")
+    }
+
+    /// Powers the system up in image mode: every board is `<images>/<board>.elf` (as
+    /// `cargo xtask images` writes them) on an emulated 68020, leaving reset at a seeded
+    /// skew; global RAM, the arm and the devices as in [`Self::new`].
+    pub fn with_images(cfg: Config, images: &Path) -> Result<Self, ImageError> {
+        let all: Vec<BoardId> = cfg.boards.iter().map(|b| b.0).collect();
+        Self::build(cfg, Some((images, &all)))
+    }
+
+    /// Mixed mode: the boards in `which` as their images (as [`Self::with_images`]), the
+    /// others native. To find which board's image behaves unlike its crate.
+    pub fn with_some_images(
+        cfg: Config,
+        images: &Path,
+        which: &[BoardId],
+    ) -> Result<Self, ImageError> {
+        Self::build(cfg, Some((images, which)))
+    }
+
+    fn build(cfg: Config, images: Option<(&Path, &[BoardId])>) -> Result<Self, ImageError> {
         let mut rng = Rng::new(cfg.seed);
         let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
         vme_map::init_header(&mut ArrayBus::new(&mut global));
@@ -371,19 +424,32 @@ impl Sim {
             crate::sensing_cal::write_table(&mut ArrayBus::new(&mut global), &table, 1);
         }
         let sensing_io = SensingIo::new(camera);
-        let slots = cfg
-            .boards
-            .iter()
-            .map(|&(id, period_s)| Slot {
+        let mut slots = Vec::new();
+        for &(id, period_s) in &cfg.boards {
+            let phase = rng.next_f64();
+            let own_io =
+                (!matches!(id, BoardId::Servo | BoardId::Sensing)).then(|| IdOnly::new(id));
+            let code = match images.filter(|(_, which)| which.contains(&id)) {
+                None => Code::Native(Native::new(id, cfg.planner)),
+                Some((dir, _)) => {
+                    let path = dir.join(format!("{}.elf", crate::boot::image_name(id)));
+                    let image = Image::load(&path)?;
+                    let mut b =
+                        EmuBoard::new(id, &image, crate::devices::standalone(id), &mut global);
+                    b.t0 = (phase * RESET_SKEW_US * 1e-6 * CPU_HZ as f64) as u64;
+                    Code::Image(Box::new(b))
+                }
+            };
+            slots.push(Slot {
                 id,
-                code: Native::new(id, cfg.planner),
-                own_io: (!matches!(id, BoardId::Servo | BoardId::Sensing)).then(|| IdOnly::new(id)),
+                code,
+                own_io,
                 period_s,
-                next_s: rng.next_f64() * period_s,
+                next_s: phase * period_s,
                 polls: 0,
                 halted: false,
-            })
-            .collect();
+            });
+        }
         let mut faults = cfg.faults.clone();
         faults.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         let mut sim = Sim {
@@ -403,6 +469,7 @@ impl Sim {
             in_contact: false,
             clearance_m: f64::INFINITY,
             disks: Vec::new(),
+            debugger: None,
         };
         sim.disks = sim.cfg.obstacles.iter().map(|o| o.at(0.0)).collect();
         sim.clearance_m = sim.nearest_clearance();
@@ -410,7 +477,71 @@ impl Sim {
         for i in 0..sim.slots.len() {
             sim.with_board(i, 0, |code, g, io| code.boot(g, io));
         }
-        sim
+        Ok(sim)
+    }
+
+    /// Whether any board runs as its image.
+    pub fn image_mode(&self) -> bool {
+        self.slots.iter().any(|s| matches!(s.code, Code::Image(_)))
+    }
+
+    /// The emulated board `id` (image mode), to step or inspect in tests and the debugger.
+    /// Stepping it on its own moves its clock ahead of the plant's; the simulation lets the
+    /// plant catch up before it runs the board again.
+    pub fn emu_board(&mut self, id: BoardId) -> Option<&mut EmuBoard> {
+        self.slots
+            .iter_mut()
+            .find(|s| s.id == id)
+            .and_then(|s| match &mut s.code {
+                Code::Image(b) => Some(&mut **b),
+                Code::Native(_) => None,
+            })
+    }
+
+    /// Executes `n` instructions of image board `id` alone, with its own devices and the
+    /// shared global RAM (the plant and the other boards wait). Returns the cycles taken, or
+    /// `None` if `id` is not an image board of this simulation.
+    pub fn step_instructions(&mut self, id: BoardId, n: u64) -> Option<u64> {
+        let i = self.slots.iter().position(|s| s.id == id)?;
+        let (dev, code) = Self::parts(&mut self.slots[i], &mut self.servo_io, &mut self.sensing_io);
+        let Code::Image(b) = code else {
+            return None;
+        };
+        let mut c = 0;
+        for _ in 0..n {
+            c += b.step_with(&mut self.global, Some(&mut *dev));
+        }
+        Some(c)
+    }
+
+    /// Serves the GDB remote protocol for image board `server.board()` on `server`'s
+    /// connection: the simulation starts stopped, before the board's first instruction.
+    pub fn attach_debugger(&mut self, server: crate::gdb::Server) {
+        self.debugger = Some(server);
+    }
+
+    /// Ends a debugging session: GDB, if still attached, is told the program exited.
+    pub fn detach_debugger(&mut self) {
+        self.debugger = None;
+    }
+
+    /// The device a slot's board reaches as its private I/O, and the board's code.
+    fn parts<'a>(
+        slot: &'a mut Slot,
+        servo_io: &'a mut ServoIo,
+        sensing_io: &'a mut SensingIo<Camera>,
+    ) -> (&'a mut dyn Device, &'a mut Code) {
+        let Slot {
+            id, code, own_io, ..
+        } = slot;
+        let dev: &mut dyn Device = match id {
+            BoardId::Servo => servo_io,
+            BoardId::Sensing => sensing_io,
+            _ => own_io
+                .as_mut()
+                .expect("boards without their own I/O have the ID switch"),
+        };
+        (dev, code)
     }
 
     /// Simulated time.
@@ -419,12 +550,14 @@ impl Sim {
     }
 
     /// Where the sensing board's clock (microseconds from its first strobe slot) started, in
-    /// simulated microseconds: its first pass.
-    pub fn sensing_clock_offset_us(&self) -> f64 {
+    /// simulated microseconds: its first pass. Native mode only (an image's first pass is
+    /// wherever its code reaches it): `None` in image mode.
+    pub fn sensing_clock_offset_us(&self) -> Option<f64> {
         self.slots
             .iter()
             .find(|s| s.id == BoardId::Sensing)
-            .map_or(0.0, |s| (s.next_s - s.polls as f64 * s.period_s) * 1e6)
+            .filter(|s| matches!(s.code, Code::Native(_)))
+            .map(|s| (s.next_s - s.polls as f64 * s.period_s) * 1e6)
     }
 
     /// Global RAM as the host sees it.
@@ -441,14 +574,9 @@ impl Sim {
         f: impl FnOnce(&mut Native, &mut dyn GlobalBus, &mut NativeIo),
     ) {
         let mut bus_error = None;
-        let slot = &mut self.slots[i];
-        let dev: &mut dyn Device = match slot.id {
-            BoardId::Servo => &mut self.servo_io,
-            BoardId::Sensing => &mut self.sensing_io,
-            _ => slot
-                .own_io
-                .as_mut()
-                .expect("boards without their own I/O have the ID switch"),
+        let (dev, code) = Self::parts(&mut self.slots[i], &mut self.servo_io, &mut self.sensing_io);
+        let Code::Native(code) = code else {
+            return; // an image boots itself from reset
         };
         let mut io = NativeIo {
             dev,
@@ -456,7 +584,8 @@ impl Sim {
             bus_error: &mut bus_error,
         };
         let mut g = ArrayBus::new(&mut self.global);
-        let r = catch_unwind(AssertUnwindSafe(|| f(&mut slot.code, &mut g, &mut io)));
+        let r = catch_unwind(AssertUnwindSafe(|| f(code, &mut g, &mut io)));
+        let slot = &mut self.slots[i];
         let mut g = ArrayBus::new(&mut self.global);
         let hb = g.read_u32(vme_map::BoardSlot::of(slot.id).heartbeat());
         if let Err(p) = r {
@@ -520,13 +649,14 @@ impl Sim {
             let f = self.faults.remove(0);
             self.inject(f);
         }
-        // Every board due in this step, in order of activation time (ties: slot order).
+        // Every native board due in this step, in order of activation time (ties: slot
+        // order); then the image boards, interleaved, up to the step's end.
         loop {
             let next = self
                 .slots
                 .iter()
                 .enumerate()
-                .filter(|(_, s)| !s.halted && s.next_s < t1)
+                .filter(|(_, s)| !s.halted && s.next_s < t1 && matches!(s.code, Code::Native(_)))
                 .min_by(|a, b| a.1.next_s.total_cmp(&b.1.next_s).then(a.0.cmp(&b.0)))
                 .map(|(i, _)| i);
             let Some(i) = next else { break };
@@ -537,9 +667,68 @@ impl Sim {
             s.polls += 1;
             s.next_s = when + s.period_s;
         }
+        self.run_images(t1);
         self.plant.step(self.servo_io.amp_volts());
         self.steps += 1;
         self.check_collisions();
+    }
+
+    /// Runs every image board up to the system clock at `t1_s`, interleaved in slices;
+    /// serves the debugger when its board stops.
+    fn run_images(&mut self, t1_s: f64) {
+        if !self.image_mode() {
+            return;
+        }
+        let end = (t1_s * CPU_HZ as f64).round() as u64;
+        let mut clock = (self.t_s() * CPU_HZ as f64).round() as u64;
+        let dbg_board = self.debugger.as_ref().map(|d| d.board());
+        if let Some(d) = self.debugger.as_mut() {
+            d.poll_interrupt();
+        }
+        while clock < end {
+            clock = (clock + IMAGE_SLICE_CYCLES).min(end);
+            for i in 0..self.slots.len() {
+                if self.slots[i].halted {
+                    continue;
+                }
+                let debugged = dbg_board == Some(self.slots[i].id);
+                loop {
+                    let (dev, code) =
+                        Self::parts(&mut self.slots[i], &mut self.servo_io, &mut self.sensing_io);
+                    let Code::Image(b) = code else { break };
+                    if clock <= b.t0 {
+                        break;
+                    }
+                    let until = clock - b.t0;
+                    let stop = match self.debugger.as_mut().filter(|_| debugged) {
+                        Some(d) if d.wants_stop() => Stop::Breakpoint,
+                        Some(d) => b.run_until(&mut self.global, Some(dev), until, d.breakpoints()),
+                        None => b.run_until(&mut self.global, Some(dev), until, &[]),
+                    };
+                    let halted = b.state == RunState::Halted;
+                    if debugged && (stop == Stop::Breakpoint || halted) {
+                        if let Some(d) = self.debugger.as_mut() {
+                            let (dev, code) = Self::parts(
+                                &mut self.slots[i],
+                                &mut self.servo_io,
+                                &mut self.sensing_io,
+                            );
+                            let Code::Image(b) = code else { break };
+                            if !d.serve(b, &mut self.global, dev) {
+                                self.debugger = None; // detached: run on freely
+                            }
+                            if b.state == RunState::Running {
+                                continue;
+                            }
+                        }
+                    }
+                    if halted {
+                        self.slots[i].halted = true;
+                    }
+                    break;
+                }
+            }
+        }
     }
 
     fn inject(&mut self, f: Fault) {
@@ -601,11 +790,25 @@ impl Sim {
     pub fn board_stats(&self) -> Vec<BoardStats> {
         self.slots
             .iter()
-            .map(|s| BoardStats {
-                board: s.id,
-                polls: s.polls,
-                period_s: s.period_s,
-                halted: s.halted,
+            .map(|s| match &s.code {
+                Code::Native(_) => BoardStats {
+                    board: s.id,
+                    polls: s.polls,
+                    period_s: s.period_s,
+                    halted: s.halted,
+                    loop_us: None,
+                    stack_bytes: None,
+                    cycles: None,
+                },
+                Code::Image(b) => BoardStats {
+                    board: s.id,
+                    polls: b.beats.periods + b.beats.last_beat.is_some() as u64,
+                    period_s: s.period_s,
+                    halted: s.halted,
+                    loop_us: b.beats.period_us(),
+                    stack_bytes: b.stack_high_water(),
+                    cycles: Some(b.cycles),
+                },
             })
             .collect()
     }

@@ -23,7 +23,7 @@ fn every_shipped_scenario_loads_and_runs_briefly() {
         let summary = run_to_dir(
             &s,
             &out,
-            RunOptions {
+            &RunOptions {
                 quiet: true,
                 ..Default::default()
             },
