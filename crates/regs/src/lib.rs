@@ -96,8 +96,13 @@ impl MmioIo {
 impl IoBus for MmioIo {
     #[inline(always)]
     fn read16(&mut self, off: u32) -> u16 {
+        extern "C" {
+            // One MOVE.W in the runtime's assembly (crates/rt/asm/rt.S): a volatile read here
+            // was miscompiled into a 32-bit read of two registers (docs/toolchain.md).
+            fn __io_read16(addr: *const u16) -> u32;
+        }
         // SAFETY: `new`'s contract; offsets come from this crate's tables.
-        unsafe { core::ptr::read_volatile((PRIVATE_IO_BASE + off) as *const u16) }
+        unsafe { __io_read16((PRIVATE_IO_BASE + off) as *const u16) as u16 }
     }
     #[inline(always)]
     fn write16(&mut self, off: u32, val: u16) {

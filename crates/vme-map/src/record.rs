@@ -132,8 +132,9 @@ impl<R: Record> SeqLock<R> {
     pub fn publish(&self, bus: &mut dyn GlobalBus, rec: &R) {
         let seq = bus.read_u32(self.off);
         // Odd while writing; a writer that died mid-write leaves it odd, which readers
-        // see as a torn record forever.
-        let odd = (seq | 1).wrapping_add(if seq & 1 == 0 { 0 } else { 2 });
+        // see as a torn record forever. (Without a branch: LLVM's M68k backend put a
+        // register copy between the test and its branch here; docs/toolchain.md, class 1.)
+        let odd = (seq | 1).wrapping_add((seq & 1) << 1);
         bus.write_u32(self.off, odd);
         let base = self.off + 4;
         rec.encode(&mut |i, w| bus.write_u32(base + 4 * i, w));
@@ -151,7 +152,7 @@ impl<R: Record> SeqLock<R> {
         words: &[u32; N],
     ) {
         let seq = bus.read_u32(self.off);
-        let odd = (seq | 1).wrapping_add(if seq & 1 == 0 { 0 } else { 2 });
+        let odd = (seq | 1).wrapping_add((seq & 1) << 1);
         bus.write_u32(self.off, odd);
         let base = self.off + 4 + 4 * first;
         let mut i = 0;
@@ -184,13 +185,13 @@ impl<R: Record> SeqLock<R> {
     pub fn read(&self, bus: &mut dyn GlobalBus) -> Result<(R, u32), Torn> {
         for _ in 0..Self::RETRIES {
             let s1 = bus.read_u32(self.off);
-            if s1 & 1 != 0 {
-                continue;
-            }
             let base = self.off + 4;
             let rec = R::decode(&mut |i| bus.read_u32(base + 4 * i));
             let s2 = bus.read_u32(self.off);
-            if s1 == s2 {
+            // Whole when the sequence was even and unchanged. One test of one word: a branch
+            // on `s1 & 1` drew a register copy between its test and the branch from LLVM's
+            // M68k backend (docs/toolchain.md, class 1).
+            if (s1 ^ s2) | (s1 & 1) == 0 {
                 return Ok((rec, s1));
             }
         }
