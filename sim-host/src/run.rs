@@ -268,7 +268,7 @@ pub fn power_up(scenario: &Scenario, opts: &RunOptions) -> Result<Sim, String> {
         }
         let server = crate::gdb::Server::listen(board, port, |p| {
             eprintln!(
-                "sim-host: waiting for GDB on 127.0.0.1:{p} for board {} (gdb-multiarch {}.elf -ex 'target remote :{p}')",
+                "sim-host: waiting for GDB on 127.0.0.1:{p} for board {} (gdb-multiarch {}.elf -ex 'maint set dwarf unwinders off' -ex 'target remote :{p}')",
                 board.name(),
                 crate::boot::image_name(board)
             )
