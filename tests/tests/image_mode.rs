@@ -102,7 +102,7 @@ fn the_scenarios_end_the_same_natively_and_as_images() {
             );
             assert!(0.0 < lo && lo <= mean && mean <= hi, "{name}: {}", b.board);
             assert!(b.stack_bytes.unwrap() > 0, "{name}: {}", b.board);
-            assert_eq!(b.state != "SafeStop", true, "{name}: {}", b.board);
+            assert_ne!(b.state, "SafeStop", "{name}: {}", b.board);
         }
         assert!(ns.boards.iter().all(|b| b.loop_mean_us.is_none()));
     };
