@@ -268,3 +268,38 @@ fn gdb_attaches_to_a_board_breaks_steps_and_reads_memory() {
     // exited) and the servo kept beating.
     assert!(hb > 10, "servo heartbeat {hb}");
 }
+
+#[test]
+fn a_bus_error_injected_into_an_image_board_is_taken_by_its_cpu() {
+    let mut sc = scenario("fig_v_6");
+    sc.config.duration_s = 0.05;
+    sc.config.faults = vec![sim_host::sim::Fault {
+        at_s: 0.02,
+        board: BoardId::Reflex,
+        kind: sim_host::sim::FaultKind::BusError,
+    }];
+    let mut sim = Sim::with_images(sc.config, &images_dir()).unwrap();
+    while !sim.done() {
+        sim.step();
+    }
+    let st = BoardSlot::of(BoardId::Reflex).status_word(&mut sim.bus());
+    assert_eq!(st.state(), Some(vme_map::BoardState::SafeStop));
+    assert_eq!(st.fault(), Some(vme_map::FaultCode::BusError));
+    let (rec, _) = BoardSlot::of(BoardId::Reflex)
+        .fault()
+        .read(&mut sim.bus())
+        .unwrap();
+    assert_eq!(
+        rec.fault_addr,
+        regs::PRIVATE_IO_BASE + regs::UNDECODED_PROBE
+    );
+    let halted = sim
+        .board_stats()
+        .into_iter()
+        .find(|s| s.board == BoardId::Reflex);
+    assert!(halted.unwrap().halted, "the CPU stopped");
+    assert_eq!(
+        sim.emu_board(BoardId::Reflex).unwrap().state,
+        sim_host::emu::RunState::Halted
+    );
+}
