@@ -303,3 +303,30 @@ fn a_bus_error_injected_into_an_image_board_is_taken_by_its_cpu() {
         sim_host::emu::RunState::Halted
     );
 }
+
+#[test]
+fn three_cspace_images_share_the_work_list() {
+    let mut sc = scenario("fig_v_8");
+    sc.config.duration_s = 0.3;
+    sc.config.boards = [
+        BoardId::Cspace0,
+        BoardId::Cspace1,
+        BoardId::Cspace2,
+        BoardId::Sensing,
+    ]
+    .map(|b| (b, 1e-3))
+    .to_vec();
+    let mut sim = Sim::with_images(sc.config, &images_dir()).unwrap();
+    while !sim.done() {
+        sim.step();
+    }
+    for s in sim.board_stats() {
+        let st = BoardSlot::of(s.board).status_word(&mut sim.bus());
+        assert_eq!(st.fault(), Some(vme_map::FaultCode::None), "{:?}", s.board);
+        assert!(s.polls > 10, "{:?} ran {} passes", s.board, s.polls);
+    }
+    // The obstacle is drawn once, by whichever board claimed it: the map holds its image.
+    let marked = sim_host::run::marked_pixels(&mut sim);
+    let n = marked.iter().filter(|&&m| m).count();
+    assert!(n > 50, "{n} pixels marked");
+}
