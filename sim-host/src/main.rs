@@ -5,7 +5,7 @@ use sim_host::boot::{boot, default_images_dir, parse_board, FIVE};
 use sim_host::emu::CPU_HZ;
 use sim_host::run::{run_to_dir, RunOptions};
 use sim_host::scenario::Scenario;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use vme_map::BoardId;
 
@@ -29,6 +29,37 @@ enum Mode {
     Image,
 }
 
+/// How a scenario is run (`run` and `demo`).
+#[derive(clap::Args)]
+struct RunArgs {
+    /// native or image.
+    #[arg(long, value_enum, default_value_t = Mode::Native)]
+    mode: Mode,
+    /// Image mode: directory holding `<board>.elf` (written by `cargo xtask images`).
+    #[arg(long)]
+    images: Option<PathBuf>,
+    /// Image mode: only these boards (comma-separated) as images, the others native.
+    #[arg(long, value_delimiter = ',')]
+    image_boards: Vec<String>,
+    /// Image mode: serve the GDB remote protocol for `<board>:<port>` on 127.0.0.1 and
+    /// wait for GDB before the run starts (e.g. `reflex:1234`; port 0 picks a free one).
+    #[arg(long)]
+    gdb: Option<String>,
+    /// Run directory to write (default out/run, or out/demo for `demo`).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Trace interval in microseconds (a multiple of the plant step).
+    #[arg(long, default_value_t = 1000.0)]
+    trace_every_us: f64,
+    /// Serve the live monitor on 127.0.0.1:<PORT> (0: any free port) and pace the run to
+    /// real time.
+    #[arg(long)]
+    monitor: Option<u16>,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a scenario and write its run directory (trace.csv, summary.json, PNGs): natively
@@ -38,28 +69,18 @@ enum Cmd {
     Run {
         /// The scenario file (TOML; docs/scenarios.md).
         scenario: PathBuf,
-        /// native or image.
-        #[arg(long, value_enum, default_value_t = Mode::Native)]
-        mode: Mode,
-        /// Image mode: directory holding `<board>.elf` (written by `cargo xtask images`).
+        #[command(flatten)]
+        run: RunArgs,
+    },
+    /// The main job: the integrated demo (sim-host/scenarios/demo.toml: the arm following a
+    /// moving wand among moving obstacles and the instructional robot, all five boards) with
+    /// its run directory and `report.html` (default `out/demo`); `--seed` picks the run.
+    Demo {
+        /// Seed (default: the scenario's).
         #[arg(long)]
-        images: Option<PathBuf>,
-        /// Image mode: only these boards (comma-separated) as images, the others native.
-        #[arg(long, value_delimiter = ',')]
-        image_boards: Vec<String>,
-        /// Image mode: serve the GDB remote protocol for `<board>:<port>` on 127.0.0.1 and
-        /// wait for GDB before the run starts (e.g. `reflex:1234`; port 0 picks a free one).
-        #[arg(long)]
-        gdb: Option<String>,
-        /// Run directory to write.
-        #[arg(long, default_value = "out/run")]
-        out: PathBuf,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
-        /// Trace interval in microseconds (a multiple of the plant step).
-        #[arg(long, default_value_t = 1000.0)]
-        trace_every_us: f64,
+        seed: Option<u64>,
+        #[command(flatten)]
+        run: RunArgs,
     },
     /// Measurements: `sim` = real-time factor of the native simulation (`--seconds`, `--reps`);
     /// `servo` = step responses against the thesis's baselines, with pictures (`--out`);
@@ -178,99 +199,30 @@ enum Cmd {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.cmd {
-        Cmd::Run {
-            scenario,
-            out,
-            quiet,
-            trace_every_us,
-            mode,
-            images,
-            image_boards,
-            gdb,
-        } => {
-            let sc = match Scenario::load(&scenario) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("sim-host: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let steps = trace_every_us * 1e-6 / sc.config.dt_s;
-            if !(steps >= 1.0 && (steps - steps.round()).abs() < 1e-6) {
-                eprintln!(
-                    "sim-host: --trace-every-us must be a multiple of the plant step ({} us)",
-                    sc.config.dt_s * 1e6
-                );
-                return ExitCode::from(2);
+        Cmd::Run { scenario, run } => match Scenario::load(&scenario) {
+            Ok(sc) => run_cmd(&sc, run, "out/run"),
+            Err(e) => {
+                eprintln!("sim-host: {e}");
+                ExitCode::from(2)
             }
-            let gdb = match gdb.as_deref().map(sim_host::gdb::parse_spec).transpose() {
-                Ok(g) => g,
-                Err(e) => {
-                    eprintln!("sim-host: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            if mode == Mode::Native
-                && (images.is_some() || gdb.is_some() || !image_boards.is_empty())
-            {
-                eprintln!("sim-host: --images, --image-boards and --gdb need --mode image");
-                return ExitCode::from(2);
-            }
-            let mut which = Vec::new();
-            for b in &image_boards {
-                match parse_board(b) {
-                    Some(id) => which.push(id),
-                    None => {
-                        eprintln!("sim-host: --image-boards: no board {b} ({BOARD_NAMES})");
-                        return ExitCode::from(2);
+        },
+        Cmd::Demo { seed, run } => {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/demo.toml");
+            match Scenario::load(&path) {
+                Ok(mut sc) => {
+                    if let Some(seed) = seed {
+                        sc.config.seed = seed;
                     }
-                }
-            }
-            let opts = RunOptions {
-                trace_every: steps.round() as u64,
-                quiet,
-                images: (mode == Mode::Image).then(|| images.unwrap_or_else(default_images_dir)),
-                image_boards: which,
-                gdb,
-            };
-            match run_to_dir(&sc, &out, &opts) {
-                Ok(s) => {
-                    println!(
-                        "{}: {:.3} s simulated in {:.3} s ({:.0}x real time); collisions {}; min clearance {}; goal {}",
-                        sc.name,
-                        s.duration_s,
-                        s.wall_s,
-                        s.real_time_factor,
-                        s.collisions,
-                        s.min_clearance_m.map_or("-".into(), |c| format!("{:.1} mm", c * 1e3)),
-                        s.goal_reached.map_or("-".into(), |g| if g { "reached".into() } else { format!("not reached ({:.1} mm off)", s.final_goal_error_m.unwrap_or(0.0) * 1e3) })
-                    );
-                    if s.mode == "image" {
-                        println!("board      loop min/mean/max (us at 16.7 MHz)   rate Hz  budget us  share  stack B  state");
-                        for b in &s.boards {
-                            println!(
-                                "{:<10} {:>9.1} {:>9.1} {:>9.1}          {:>8.0} {:>10.0} {:>6.2} {:>8} {}",
-                                b.board,
-                                b.loop_min_us.unwrap_or(f64::NAN),
-                                b.loop_mean_us.unwrap_or(f64::NAN),
-                                b.loop_max_us.unwrap_or(f64::NAN),
-                                b.rate_hz,
-                                b.period_us,
-                                b.budget_share.unwrap_or(f64::NAN),
-                                b.stack_bytes.map_or("-".into(), |x| x.to_string()),
-                                b.state
-                            );
-                        }
+                    let out = run.out.clone().unwrap_or_else(|| PathBuf::from("out/demo"));
+                    let code = run_cmd(&sc, run, "out/demo");
+                    if code == ExitCode::SUCCESS {
+                        println!("open {} in a browser", out.join("report.html").display());
                     }
-                    println!(
-                        "wrote trace.csv, summary.json, joints.png, task.png and cspace.png to {}",
-                        out.display()
-                    );
-                    ExitCode::SUCCESS
+                    code
                 }
                 Err(e) => {
                     eprintln!("sim-host: {e}");
-                    ExitCode::FAILURE
+                    ExitCode::from(2)
                 }
             }
         }
@@ -709,6 +661,98 @@ fn planner_campaign(
             } else {
                 ExitCode::SUCCESS
             }
+        }
+        Err(e) => {
+            eprintln!("sim-host: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs `sc` as `a` asks and writes its run directory (default `default_out`).
+fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
+    let RunArgs {
+        mode,
+        images,
+        image_boards,
+        gdb,
+        out,
+        quiet,
+        trace_every_us,
+        monitor,
+    } = a;
+    let out = out.unwrap_or_else(|| PathBuf::from(default_out));
+    let steps = trace_every_us * 1e-6 / sc.config.dt_s;
+    if !(steps >= 1.0 && (steps - steps.round()).abs() < 1e-6) {
+        eprintln!(
+            "sim-host: --trace-every-us must be a multiple of the plant step ({} us)",
+            sc.config.dt_s * 1e6
+        );
+        return ExitCode::from(2);
+    }
+    let gdb = match gdb.as_deref().map(sim_host::gdb::parse_spec).transpose() {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("sim-host: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if mode == Mode::Native && (images.is_some() || gdb.is_some() || !image_boards.is_empty()) {
+        eprintln!("sim-host: --images, --image-boards and --gdb need --mode image");
+        return ExitCode::from(2);
+    }
+    let mut which = Vec::new();
+    for b in &image_boards {
+        match parse_board(b) {
+            Some(id) => which.push(id),
+            None => {
+                eprintln!("sim-host: --image-boards: no board {b} ({BOARD_NAMES})");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let opts = RunOptions {
+        trace_every: steps.round() as u64,
+        quiet,
+        images: (mode == Mode::Image).then(|| images.unwrap_or_else(default_images_dir)),
+        image_boards: which,
+        gdb,
+        monitor,
+    };
+    match run_to_dir(sc, &out, &opts) {
+        Ok(s) => {
+            println!(
+                "{}: {:.3} s simulated in {:.3} s ({:.0}x real time); collisions {}; min clearance {}; goal {}",
+                sc.name,
+                s.duration_s,
+                s.wall_s,
+                s.real_time_factor,
+                s.collisions,
+                s.min_clearance_m.map_or("-".into(), |c| format!("{:.1} mm", c * 1e3)),
+                s.goal_reached.map_or("-".into(), |g| if g { "reached".into() } else { format!("not reached ({:.1} mm off)", s.final_goal_error_m.unwrap_or(0.0) * 1e3) })
+            );
+            if s.mode == "image" {
+                println!("board      loop min/mean/max (us at 16.7 MHz)   rate Hz  budget us  share  stack B  state");
+                for b in &s.boards {
+                    println!(
+                        "{:<10} {:>9.1} {:>9.1} {:>9.1}          {:>8.0} {:>10.0} {:>6.2} {:>8} {}",
+                        b.board,
+                        b.loop_min_us.unwrap_or(f64::NAN),
+                        b.loop_mean_us.unwrap_or(f64::NAN),
+                        b.loop_max_us.unwrap_or(f64::NAN),
+                        b.rate_hz,
+                        b.period_us,
+                        b.budget_share.unwrap_or(f64::NAN),
+                        b.stack_bytes.map_or("-".into(), |x| x.to_string()),
+                        b.state
+                    );
+                }
+            }
+            println!(
+                "wrote trace.csv, summary.json, joints.png, task.png, cspace.png and report.html to {}",
+                out.display()
+            );
+            ExitCode::SUCCESS
         }
         Err(e) => {
             eprintln!("sim-host: {e}");

@@ -6,6 +6,8 @@
 //!   every board's heartbeat. Deterministic: the same scenario and seed give the same bytes.
 //! * `summary.json`: the run's figures.
 //! * `joints.png`, `task.png`, `cspace.png`: pictures of the run (module `plots`).
+//! * `report.html`: the animated task space and C-space map, the plots and the figures
+//!   (module `report`).
 
 use crate::plots::Sample;
 use crate::scenario::Scenario;
@@ -31,6 +33,26 @@ pub struct RunOptions {
     /// Image mode: serve the GDB remote protocol for this board on this TCP port of
     /// 127.0.0.1 (0: any free port), waiting for GDB before the run starts.
     pub gdb: Option<(BoardId, u16)>,
+    /// Serve the live monitor on this TCP port of 127.0.0.1 (0: any free port) and pace the
+    /// run to real time.
+    pub monitor: Option<u16>,
+}
+
+/// Report and monitor frames are taken this often (simulated seconds).
+pub const FRAME_EVERY_S: f64 = 0.05;
+
+/// What a run produced.
+pub struct RunOutput {
+    /// `trace.csv`'s text.
+    pub trace: String,
+    /// `summary.json`'s figures.
+    pub summary: Summary,
+    /// Plot samples, one per trace row.
+    pub samples: Vec<Sample>,
+    /// Report frames, one per [`FRAME_EVERY_S`].
+    pub frames: Vec<crate::report::Frame>,
+    /// The simulation as it ended.
+    pub sim: Sim,
 }
 
 impl Default for RunOptions {
@@ -41,6 +63,7 @@ impl Default for RunOptions {
             images: None,
             image_boards: Vec::new(),
             gdb: None,
+            monitor: None,
         }
     }
 }
@@ -207,8 +230,12 @@ pub fn sample(sim: &mut Sim) -> Sample {
 
 /// The C-space map in global RAM now: which pixels are marked (`[i2 * 128 + i1]`).
 pub fn marked_pixels(sim: &mut Sim) -> Vec<bool> {
+    marked_in(&mut sim.bus())
+}
+
+/// The C-space map in global RAM `g`: which pixels are marked (`[i2 * 128 + i1]`).
+pub fn marked_in(g: &mut impl GlobalBus) -> Vec<bool> {
     use vme_map::layout::{cspace_counter, CSPACE_STRIPES};
-    let mut g = sim.bus();
     let stripes: Vec<u32> = (0..128)
         .map(|i| g.read_u32(CSPACE_STRIPES + 4 * i))
         .collect();
@@ -241,8 +268,8 @@ pub fn exact_pixels(disks: &[arm::geometry::Disk]) -> Vec<bool> {
 
 /// Runs `scenario`; returns the trace text and the summary.
 pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<(String, Summary), String> {
-    let (trace, summary, _, _) = run_sampled(scenario, opts)?;
-    Ok((trace, summary))
+    let o = run_sampled(scenario, opts)?;
+    Ok((o.trace, o.summary))
 }
 
 /// Powers up the simulation of `scenario` in the mode `opts` asks for (and waits for GDB if
@@ -279,13 +306,23 @@ pub fn power_up(scenario: &Scenario, opts: &RunOptions) -> Result<Sim, String> {
     Ok(sim)
 }
 
-/// Runs `scenario`; returns the trace text, the summary, the plot samples and the
-/// simulation as it ended.
-pub fn run_sampled(
-    scenario: &Scenario,
-    opts: &RunOptions,
-) -> Result<(String, Summary, Vec<Sample>, Sim), String> {
+/// Runs `scenario`; returns the trace text, the summary, the plot samples, the report's
+/// frames and the simulation as it ended.
+pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, String> {
     let mut sim = power_up(scenario, opts)?;
+    let mut monitor = match opts.monitor {
+        Some(port) => {
+            let m = crate::monitor::Monitor::start(port, &scenario.name, &scenario.description)?;
+            eprintln!(
+                "sim-host: live monitor on http://127.0.0.1:{}/ (the run is paced to real time)",
+                m.port()
+            );
+            Some(m)
+        }
+        None => None,
+    };
+    let frame_every = ((FRAME_EVERY_S / scenario.config.dt_s).round() as u64).max(1);
+    let mut frames = vec![crate::report::frame(&mut sim)];
     let total = (scenario.config.duration_s / scenario.config.dt_s).round() as u64;
     // The bar appears only once a run has taken more than a second of wall time.
     let bar = indicatif::ProgressBar::with_draw_target(
@@ -303,6 +340,17 @@ pub fn run_sampled(
             trace_row(&mut sim, &mut trace);
             samples.push(sample(&mut sim));
         }
+        if sim.steps.is_multiple_of(frame_every) {
+            frames.push(crate::report::frame(&mut sim));
+            if let Some(m) = monitor.as_mut() {
+                m.publish(&mut sim);
+                // Real time: the simulation may not run ahead of the wall clock.
+                let ahead = sim.t_s() - start.elapsed().as_secs_f64();
+                if ahead > 0.0 {
+                    std::thread::sleep(std::time::Duration::from_secs_f64(ahead));
+                }
+            }
+        }
         if sim.steps.is_multiple_of(2000) {
             if !opts.quiet && !shown && start.elapsed().as_secs_f64() > 1.0 {
                 bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
@@ -315,7 +363,13 @@ pub fn run_sampled(
     let wall_s = start.elapsed().as_secs_f64();
     sim.detach_debugger();
     let summary = summarize(scenario, &mut sim, wall_s);
-    Ok((trace, summary, samples, sim))
+    Ok(RunOutput {
+        trace,
+        summary,
+        samples,
+        frames,
+        sim,
+    })
 }
 
 /// The state of the world at the end of a run, for the C-space picture.
@@ -400,12 +454,18 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
     }
 }
 
-/// Runs `scenario` and writes `trace.csv`, `summary.json`, `joints.png`, `task.png` and
-/// `cspace.png` into `out`.
+/// Runs `scenario` and writes `trace.csv`, `summary.json`, `joints.png`, `task.png`,
+/// `cspace.png` and `report.html` into `out`.
 pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: &RunOptions) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
     std::fs::create_dir_all(out).map_err(io)?;
-    let (trace, summary, samples, mut sim) = run_sampled(scenario, opts)?;
+    let RunOutput {
+        trace,
+        summary,
+        samples,
+        frames,
+        mut sim,
+    } = run_sampled(scenario, opts)?;
     // The exact image of the obstacles is costly (an oracle verdict per pixel): only for
     // the picture.
     let end = End::of(&mut sim);
@@ -434,6 +494,7 @@ pub fn run_to_dir(scenario: &Scenario, out: &Path, opts: &RunOptions) -> Result<
         },
         &samples,
     )?;
+    crate::report::write(out, scenario, &summary, &frames)?;
     Ok(summary)
 }
 

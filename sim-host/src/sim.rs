@@ -228,6 +228,15 @@ pub enum FaultKind {
     Halt,
     /// The board takes a bus error (the host's fault-injection command).
     BusError,
+    /// The board runs on but its heartbeat word stays at the value it had (a stuck
+    /// heartbeat: what readers must treat as a dead board).
+    FreezeHeartbeat,
+    /// The board stops in the middle of publishing its main record: it halts, and the
+    /// record is left with half its words written and its sequence odd (the sensing
+    /// board's object table, the servo's state, the reflex's subgoal, the planner's goal;
+    /// a C-space board has no record of its own and halts mid-way through its work-list
+    /// entry instead).
+    Tear,
 }
 
 /// The longest an image board's reset release trails power-up (seeded per board).
@@ -316,6 +325,8 @@ struct Slot {
     next_s: f64,
     polls: u64,
     halted: bool,
+    /// A heartbeat held at this value (fault injection).
+    frozen_beat: Option<u32>,
 }
 
 /// Loop statistics of one board.
@@ -448,6 +459,7 @@ impl Sim {
                 next_s: phase * period_s,
                 polls: 0,
                 halted: false,
+                frozen_beat: None,
             });
         }
         let mut faults = cfg.faults.clone();
@@ -663,6 +675,7 @@ impl Sim {
             let when = self.slots[i].next_s;
             let now = (when * CPU_HZ as f64) as u64;
             self.with_board(i, now, |code, g, io| code.poll(g, io));
+            self.hold_frozen_beat(i);
             let s = &mut self.slots[i];
             s.polls += 1;
             s.next_s = when + s.period_s;
@@ -725,6 +738,7 @@ impl Sim {
                     if halted {
                         self.slots[i].halted = true;
                     }
+                    self.hold_frozen_beat(i);
                     break;
                 }
             }
@@ -737,6 +751,23 @@ impl Sim {
         };
         match f.kind {
             FaultKind::Halt => self.slots[i].halted = true,
+            FaultKind::FreezeHeartbeat => {
+                let hb = self
+                    .bus()
+                    .read_u32(vme_map::BoardSlot::of(f.board).heartbeat());
+                self.slots[i].frozen_beat = Some(hb);
+            }
+            FaultKind::Tear => {
+                self.slots[i].halted = true;
+                let g = &mut self.bus();
+                match f.board {
+                    BoardId::Sensing => tear(g, &vme_map::OBJECTS),
+                    BoardId::Servo => tear(g, &vme_map::SERVO_STATE),
+                    BoardId::Reflex => tear(g, &vme_map::REFLEX_SUBGOAL),
+                    BoardId::Planner => tear(g, &vme_map::PLANNER_GOAL),
+                    _ => {}
+                }
+            }
             FaultKind::BusError => {
                 vme_map::post_host_command(
                     &mut self.bus(),
@@ -744,6 +775,14 @@ impl Sim {
                     f.board,
                 );
             }
+        }
+    }
+
+    /// Puts a frozen heartbeat back after board `i` ran.
+    fn hold_frozen_beat(&mut self, i: usize) {
+        if let Some(hb) = self.slots[i].frozen_beat {
+            let off = vme_map::BoardSlot::of(self.slots[i].id).heartbeat();
+            self.bus().write_u32(off, hb);
         }
     }
 
@@ -812,6 +851,16 @@ impl Sim {
             })
             .collect()
     }
+}
+
+/// Leaves `lock`'s record half written with an odd sequence, as a writer that died
+/// mid-publish would (the last whole record's first half rewritten).
+fn tear<R: vme_map::record::Record + Default>(
+    g: &mut ArrayBus,
+    lock: &vme_map::record::SeqLock<R>,
+) {
+    let rec = lock.read(g).map(|r| r.0).unwrap_or_default();
+    lock.publish_torn(g, &rec);
 }
 
 #[cfg(test)]

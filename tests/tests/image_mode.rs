@@ -74,12 +74,14 @@ fn the_scenarios_end_the_same_natively_and_as_images() {
             quiet: true,
             ..Default::default()
         };
-        let (nt, ns, _, _) = run_sampled(&sc, &opts).unwrap();
+        let n = run_sampled(&sc, &opts).unwrap();
+        let (nt, ns) = (n.trace, n.summary);
         let img = RunOptions {
             images: Some(images.clone()),
             ..opts
         };
-        let (it, is, _, _) = run_sampled(&sc, &img).unwrap();
+        let i = run_sampled(&sc, &img).unwrap();
+        let (it, is) = (i.trace, i.summary);
         assert_eq!((ns.mode.as_str(), is.mode.as_str()), ("native", "image"));
         assert_eq!(ns.collisions, 0, "{name}: native");
         assert_eq!(is.collisions, 0, "{name}: image");
@@ -124,11 +126,11 @@ fn the_same_seed_gives_the_same_image_run() {
         images: Some(images_dir()),
         ..Default::default()
     };
-    let (a, _, _, _) = run_sampled(&sc, &opts).unwrap();
-    let (b, _, _, _) = run_sampled(&sc, &opts).unwrap();
+    let a = run_sampled(&sc, &opts).unwrap().trace;
+    let b = run_sampled(&sc, &opts).unwrap().trace;
     assert_eq!(a, b);
     sc.config.seed += 1;
-    let (c, _, _, _) = run_sampled(&sc, &opts).unwrap();
+    let c = run_sampled(&sc, &opts).unwrap().trace;
     assert_ne!(a, c, "another seed skews the boards' resets");
 }
 
