@@ -98,6 +98,8 @@ pub struct ServoIo {
     latched: [u16; 2],
     dac: [i16; 2],
     amp: AmpCtrl,
+    /// Cycle of the last AMP_CTRL write (the watchdog's retrigger).
+    fed_at: Option<u64>,
 }
 
 impl ServoIo {
@@ -112,6 +114,7 @@ impl ServoIo {
             latched: [0; 2],
             dac: [0; 2],
             amp: AmpCtrl::empty(),
+            fed_at: None,
         };
         for i in 0..2 {
             io.offset_counts[i] = (zero_rad[i] / rpc[i]).floor() as i64;
@@ -140,6 +143,27 @@ impl ServoIo {
                 0.0
             }
         })
+    }
+}
+
+impl ServoIo {
+    /// What the amplifiers and brakes do at CPU cycle `now`: the command volts (0 V while
+    /// disabled or once the watchdog has run out) and which brakes are engaged (a link's
+    /// brake is released only while its amplifier is enabled and the watchdog is fed).
+    pub fn outputs(&self, now: u64) -> ([f64; 2], [bool; 2]) {
+        let limit = regs::servo::AMP_WATCHDOG_US as u64 * crate::emu::CPU_HZ / 1_000_000;
+        let fed = self.fed_at.is_some_and(|t| now.saturating_sub(t) <= limit);
+        if !fed {
+            return ([0.0; 2], [true; 2]);
+        }
+        let v = self.amp_volts();
+        (
+            v,
+            [
+                !self.amp.contains(AmpCtrl::ENABLE0),
+                !self.amp.contains(AmpCtrl::ENABLE1),
+            ],
+        )
     }
 }
 
@@ -185,7 +209,10 @@ impl Device for ServoIo {
             }
             DAC0 => self.dac[0] = dac_code(val),
             DAC1 => self.dac[1] = dac_code(val),
-            AMP_CTRL => self.amp = AmpCtrl::from_bits_truncate(val),
+            AMP_CTRL => {
+                self.amp = AmpCtrl::from_bits_truncate(val);
+                self.fed_at = Some(now);
+            }
             _ => {}
         }
         true

@@ -142,6 +142,12 @@ enum Cmd {
         /// (`<out>/scene-I.png`).
         #[arg(long)]
         only: Option<u64>,
+        /// `faults` and `demo`: native or image.
+        #[arg(long, value_enum, default_value_t = Mode::Native)]
+        mode: Mode,
+        /// Image mode: directory holding `<board>.elf` (written by `cargo xtask images`).
+        #[arg(long)]
+        images: Option<PathBuf>,
     },
     /// Profile one board image on the emulated 68020: cycles per main-loop pass and the
     /// functions they go to.
@@ -235,10 +241,25 @@ fn main() -> ExitCode {
             threads,
             pictures,
             only,
+            mode,
+            images,
         } => {
             let out = out.unwrap_or_else(|| PathBuf::from(format!("out/campaign-{what}")));
             let threads = threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let images = (mode == Mode::Image).then(|| images.unwrap_or_else(default_images_dir));
+            if what == "faults" {
+                return fault_campaign(images.as_deref(), threads, &out);
+            }
+            if what == "demo" {
+                return demo_campaign(scenes, images.as_deref(), threads, &out);
+            }
+            if images.is_some() {
+                eprintln!(
+                    "sim-host: campaign {what}: --mode image is for the faults and demo campaigns"
+                );
+                return ExitCode::from(2);
+            }
             if what == "planner" {
                 if let Some(i) = only {
                     if let Err(e) = std::fs::create_dir_all(&out) {
@@ -260,7 +281,7 @@ fn main() -> ExitCode {
                 return planner_campaign(seed, scenes, threads, pictures, &out);
             }
             if what != "reflex" {
-                eprintln!("sim-host: campaign: unknown campaign {what:?} (known: reflex, planner)");
+                eprintln!("sim-host: campaign: unknown campaign {what:?} (known: reflex, planner, faults, demo)");
                 return ExitCode::from(2);
             }
             let mut any = false;
@@ -758,5 +779,64 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
             eprintln!("sim-host: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `campaign faults`: every scenario of `sim-host/scenarios/faults/`; exits 1 on a collision
+/// or a stop beyond the published arrest distance.
+fn fault_campaign(images: Option<&Path>, threads: usize, out: &Path) -> ExitCode {
+    let s = match sim_host::fault_campaign::run(
+        &sim_host::fault_campaign::default_dir(),
+        images,
+        threads,
+    ) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("sim-host: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    print!("{}", sim_host::fault_campaign::table(&s));
+    println!(
+        "{} fault scenarios ({}): {} with collisions, {} stopped beyond the published arrest distance",
+        s.scenarios, s.mode, s.with_collisions, s.beyond_arrest
+    );
+    if let Err(e) = sim_host::campaign::write_summary(out, &s) {
+        eprintln!("sim-host: {e}");
+        return ExitCode::FAILURE;
+    }
+    println!("wrote {}", out.join("summary.json").display());
+    if s.with_collisions + s.beyond_arrest > 0 {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
+}
+
+/// `campaign demo`: the demo scenario with seeds 1..=n; exits 1 on a collision.
+fn demo_campaign(n: u64, images: Option<&Path>, threads: usize, out: &Path) -> ExitCode {
+    let s = match sim_host::demo_campaign::run(n, images, threads) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("sim-host: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    for r in s.results.iter().filter(|r| !r.reached || r.collisions > 0) {
+        println!("seed {}: {} ({} collisions)", r.seed, r.why, r.collisions);
+    }
+    println!(
+        "demo, {} seeds ({}): goal reached in {}, not reached in {} (each with its reason above), {} with collisions; min clearance {:.1} mm",
+        s.seeds, s.mode, s.reached, s.seeds - s.reached, s.with_collisions, s.min_clearance_m * 1e3
+    );
+    if let Err(e) = sim_host::campaign::write_summary(out, &s) {
+        eprintln!("sim-host: {e}");
+        return ExitCode::FAILURE;
+    }
+    println!("wrote {}", out.join("summary.json").display());
+    if s.with_collisions > 0 {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
     }
 }

@@ -117,6 +117,10 @@ pub struct LinkPlant {
     pub model: LinkModel,
     /// The state.
     pub state: LinkState,
+    /// The joint's brake is engaged: [`arm::Link::brake_nm`] of friction added to the
+    /// Coulomb and breakaway friction (set by the simulation from the servo board's
+    /// watchdog, `regs::servo::AMP_WATCHDOG_US`).
+    pub brake: bool,
 }
 
 type X = [f64; 4]; // motor angle, motor velocity, link angle, link velocity
@@ -127,6 +131,7 @@ impl LinkPlant {
         Self {
             model,
             state: LinkState::at(angle_rad),
+            brake: false,
         }
     }
 
@@ -147,11 +152,12 @@ impl LinkPlant {
 
     fn deriv(&self, x: &X, tau: f64, fric_dir: f64, held: bool) -> X {
         let p = &self.model.params;
+        let brake = if self.brake { p.brake_nm } else { 0.0 };
         let friction = |v: f64| {
             if self.model.friction {
-                fric_dir * p.coulomb_nm + p.viscous_nms * v
+                fric_dir * (p.coulomb_nm + brake) + p.viscous_nms * v
             } else {
-                0.0
+                fric_dir * brake
             }
         };
         if !self.model.resonance {
@@ -193,12 +199,14 @@ impl LinkPlant {
         let x: X = [s.motor_rad, s.motor_rad_s, s.link_rad, s.link_rad_s];
         let p = self.model.params;
 
-        // Static friction: does the motor break away this step?
+        // Static friction (and the brake): does the motor break away this step?
+        let breakaway = p.breakaway_nm + if self.brake { p.brake_nm } else { 0.0 };
+        let sticks = self.model.friction || self.brake;
         let mut held = false;
         let mut dir = s.motor_rad_s.signum();
-        if self.model.friction && (s.stuck || s.motor_rad_s == 0.0) {
+        if sticks && (s.stuck || s.motor_rad_s == 0.0) {
             let f = self.drive(&x, tau);
-            if f.abs() <= p.breakaway_nm {
+            if f.abs() <= breakaway {
                 held = true;
                 dir = 0.0;
             } else {
@@ -221,10 +229,10 @@ impl LinkPlant {
                 n.link_rad = s.link_rad;
                 n.link_rad_s = 0.0;
             }
-        } else if self.model.friction && dir != 0.0 && n.motor_rad_s.signum() != dir {
+        } else if sticks && dir != 0.0 && n.motor_rad_s.signum() != dir {
             // The velocity reached zero inside the step: stop unless the torque breaks away.
             let f = self.drive(&xn, tau);
-            if f.abs() <= p.breakaway_nm {
+            if f.abs() <= breakaway {
                 n.motor_rad_s = 0.0;
                 n.stuck = true;
                 if !self.model.resonance {

@@ -376,19 +376,20 @@ impl Scenario {
                     format!("fault at_s must be within the run (0..={d}), got {when}"),
                 ));
             }
-            let kind =
-                match v.kind.as_str() {
-                    "halt" => FaultKind::Halt,
-                    "bus_error" => FaultKind::BusError,
-                    "freeze_heartbeat" => FaultKind::FreezeHeartbeat,
-                    "tear" => FaultKind::Tear,
-                    k => return Err(err(
+            let kind = match v.kind.as_str() {
+                "halt" => FaultKind::Halt,
+                "bus_error" => FaultKind::BusError,
+                "freeze_heartbeat" => FaultKind::FreezeHeartbeat,
+                "tear" => FaultKind::Tear,
+                k => {
+                    return Err(err(
                         at,
                         format!(
                             "unknown fault kind {k:?} (halt, bus_error, freeze_heartbeat, tear)"
                         ),
-                    )),
-                };
+                    ))
+                }
+            };
             cfg.faults.push(Fault {
                 at_s: when,
                 board: id,

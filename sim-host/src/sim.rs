@@ -242,10 +242,13 @@ pub enum FaultKind {
 /// The longest an image board's reset release trails power-up (seeded per board).
 pub const RESET_SKEW_US: f64 = 20.0;
 
-/// How far (CPU cycles, 10 us at 16.7 MHz) one image board runs before the next takes its
+/// How far (CPU cycles, 3 us at 16.7 MHz) one image board runs before the next takes its
 /// turn within a plant step. The boards run in parallel on the real bus; a slice much longer
-/// than a record write would let a reader meet a record torn for a whole slice.
-pub const IMAGE_SLICE_CYCLES: u64 = 167;
+/// than a record write would let a reader meet a record torn for its whole slice, every
+/// retry failing, where on the bus the writer would have finished meanwhile (at 10 us the
+/// reflex image recorded torn records and fig. VI.5 missed its goal; 3 us costs 9% of the
+/// real-time factor, docs/performance.md).
+pub const IMAGE_SLICE_CYCLES: u64 = 50;
 
 /// A board's code: its crate run natively, or its image on an emulated 68020.
 enum Code {
@@ -681,7 +684,11 @@ impl Sim {
             s.next_s = when + s.period_s;
         }
         self.run_images(t1);
-        self.plant.step(self.servo_io.amp_volts());
+        let (volts, brakes) = self.servo_io.outputs((t1 * CPU_HZ as f64) as u64);
+        for (l, b) in self.plant.links.iter_mut().zip(brakes) {
+            l.brake = b;
+        }
+        self.plant.step(volts);
         self.steps += 1;
         self.check_collisions();
     }

@@ -38,6 +38,12 @@ pub struct Link {
     pub counts_per_rev: u32,
     /// Link speed at the motors' 3000 rpm limit.
     pub max_speed_rad_s: f64,
+    /// Torque at the link of the joint's spring-applied brake, engaged when the servo
+    /// board's watchdog disables the amplifiers (`regs::servo::AMP_WATCHDOG_US`): twice the
+    /// torque limit (holding brakes are rated above the motor's peak torque), so that a
+    /// link the dead servo left accelerating for the watchdog's time still stops within the
+    /// arrest distance the servo last published (docs/reliability.md).
+    pub brake_nm: f64,
 }
 
 /// Motor torque constant, N m per A (PMI JR16M4CH): link 1's 13 N m limit through the 4:1
@@ -62,6 +68,7 @@ pub const LINK1: Link = Link {
     resonance_zeta: 0.02,
     counts_per_rev: ENCODER_LINES * 4 * 4,
     max_speed_rad_s: 3000.0 * core::f64::consts::TAU / 60.0 / 4.0,
+    brake_nm: 2.0 * AMP.current_limit_a * KT_NM_PER_A * 4.0,
 };
 
 /// Link 2: 0.0035 kg m^2 of which the rotor is 17% (thesis line ~330), 1:1 band, friction
@@ -79,6 +86,7 @@ pub const LINK2: Link = Link {
     resonance_zeta: 0.02,
     counts_per_rev: ENCODER_LINES * 4,
     max_speed_rad_s: 3000.0 * core::f64::consts::TAU / 60.0,
+    brake_nm: 2.0 * AMP.current_limit_a * KT_NM_PER_A,
 };
 
 /// Both links, index 0 = link 1.

@@ -403,7 +403,8 @@ impl Planner {
         out
     }
 
-    /// Free mode: 1 when the arm stalled short of the goal cell `goal` (the reflex's flag
+    /// Free mode: 1 when the arm stalled short of the goal cell `goal` (more than a cell
+    /// away; the reflex's flag
     /// for the planner's goal, or no cell of progress for [`PROGRESS_US`]) once the mode
     /// has settled. Sign masks, not compares and branches (docs/toolchain.md).
     #[inline(never)]
@@ -446,8 +447,17 @@ impl Planner {
             BLOCKED_US as i32,
             self.now_us.wrapping_sub(self.held_since_us) as i32,
         ) & held;
-        let off = (arm[0] - goal[0]) | (arm[1] - goal[1]);
-        let away = (off | off.wrapping_neg()) >> 31;
+        // Short of the goal: further than the cells next to it. (An arm resting at the goal
+        // one cell over, where the wand's noise put the goal cell, counted as stalled after
+        // PROGRESS_US and set off round the other approaches, elbow flip and all.)
+        // Nor at either of the goal's poses on any image of the torus (an arm at the goal
+        // never sets off round an approach).
+        let at = |p: [i32; 2]| {
+            let c = cell_of(p);
+            let w = |i: usize| masks::abs(((arm[i] - c[i] + 64) & 127) - 64);
+            masks::lt(1, w(0)) | masks::lt(1, w(1))
+        };
+        let away = masks::lt(2, d) & at(self.poses[0]) & at(self.poses[1]);
         (settled & (stalled | no_progress | held_long) & away & 1) as u32
     }
 

@@ -397,7 +397,15 @@ impl Reflex {
                 }
                 out.flags |= flags::FROM_WAND;
             }
-            GoalInput::None => {}
+            // The planner's record reads torn: keep its last goal while that is fresh; a
+            // record left torn (a planner that died mid-write) goes stale like a frozen one.
+            GoalInput::None => {
+                if self.planner_cycle.is_some()
+                    && self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US
+                {
+                    return self.hold_output(Fault::PlannerStale, sv.arrest_urad, out);
+                }
+            }
         }
         // Back from a hold: start from where the arm was held.
         if self.hold.take().is_some() {

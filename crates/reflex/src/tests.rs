@@ -366,6 +366,30 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
         }
     }
     assert_eq!(fault, Some(Fault::PlannerStale));
+    // Planner: its record left torn (GoalInput::None) for longer than PLANNER_STALE_US.
+    let mut r = Reflex::default();
+    let mut fault = None;
+    for k in 1..=100u32 {
+        let goal = if k <= 20 {
+            planner([1.0, 1.0], k)
+        } else {
+            GoalInput::None
+        };
+        let o = r.step(
+            &Input {
+                servo: Some(servo_at([0.5, 0.5], [0.0, 0.0], k)),
+                goal,
+                health: healthy(k),
+                obstacles_moving: false,
+            },
+            &mut m.map(),
+        );
+        fault = fault.or(o.new_fault);
+        if k > 75 {
+            assert_eq!(o.subgoal_urad, Some([500_000, 500_000]), "held at pass {k}");
+        }
+    }
+    assert_eq!(fault, Some(Fault::PlannerStale));
 }
 
 #[test]

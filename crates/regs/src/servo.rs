@@ -9,9 +9,20 @@
 //! * DACs: [`DAC0`]/[`DAC1`] take a 12-bit two's-complement code in bits 0-11 (-2048..=2047
 //!   for -10 V..+10 V x 2047/2048); the amplifier converts 1 A per volt. Outputs are driven only
 //!   while the matching [`AmpCtrl`] enable bit is set; at reset both are off.
+//! * Watchdog and brakes: every write of [`AMP_CTRL`] retriggers a hardware monostable of
+//!   [`AMP_WATCHDOG_US`]. When it runs out (the servo's loop stopped) both enables drop and
+//!   the joints' spring-applied brakes engage; the brakes are released only while the
+//!   amplifiers are enabled and the watchdog is fed (so at reset, and whenever the firmware
+//!   disables the amplifiers, the arm is braked). The safety net under the servo board
+//!   (docs/reliability.md).
 
 use crate::{Access, IoBus, Register};
 use bitflags::bitflags;
+
+/// Time after the last [`AMP_CTRL`] write at which the watchdog disables the amplifiers and
+/// engages the brakes (microseconds). The servo writes [`AMP_CTRL`] every pass: its longest
+/// image pass is under 2 ms (docs/performance.md).
+pub const AMP_WATCHDOG_US: u32 = 2_500;
 
 /// Encoder control (write): latch and reset strobes.
 pub const ENC_CTRL: u32 = 0x10;
