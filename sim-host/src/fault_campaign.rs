@@ -43,13 +43,14 @@ pub struct FaultResult {
     /// hold, the servo's hold, or the watchdog's brakes, the last time one began before the
     /// end); `None` if none held at the end.
     pub time_to_hold_s: Option<f64>,
-    /// Each joint's travel from where the hold began over the distance to the arrest point
-    /// the servo published then (<= 1 is inside, with [`ARREST_TOLERANCE_RAD`]); `None` when
-    /// no layer had to hold.
-    pub travel_over_arrest: Option<[f64; 2]>,
-    /// The same from the moment the fault struck (the detection latency's share shows here).
+    /// Each joint's travel from where the arm was when the fault struck over the distance
+    /// to the arrest point the servo had published then (<= 1 is inside, with
+    /// [`ARREST_TOLERANCE_RAD`]); `None` when no layer had to hold.
     pub travel_over_arrest_at_fault: Option<[f64; 2]>,
-    /// Whether the stop was within the arrest distance published when the hold began
+    /// The same from where the arm was when the hold began (the layers hold at the arrest
+    /// point of the fault's moment, so the arm comes back: above 1 here is that way back).
+    pub travel_over_arrest: Option<[f64; 2]>,
+    /// Whether the stop was within the arrest distance published when the fault struck
     /// (`None`: no hold).
     pub within_arrest: Option<bool>,
     /// Which layer held the arm at the end.
@@ -225,7 +226,7 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
         time_to_hold_s: at_hold.map(|h| h.2 - fault_s),
         travel_over_arrest: travel,
         travel_over_arrest_at_fault: travel_at_fault,
-        within_arrest: travel.map(|r| r.iter().all(|&x| x <= 1.0)),
+        within_arrest: travel_at_fault.map(|r| r.iter().all(|&x| x <= 1.0)),
         held_by,
         faults,
         goal_error_m,
@@ -245,7 +246,7 @@ pub struct Summary {
     pub scenarios: usize,
     /// Scenarios with a collision (target 0).
     pub with_collisions: usize,
-    /// Stops beyond the published arrest distance (target 0).
+    /// Stops beyond the arrest distance published when the fault struck (target 0).
     pub beyond_arrest: usize,
     /// Each scenario's result.
     pub results: Vec<FaultResult>,
@@ -275,7 +276,7 @@ pub fn run(dir: &Path, images: Option<&Path>, threads: usize) -> Result<Summary,
 /// The campaign's table (Markdown), as printed and in docs/reliability.md.
 pub fn table(s: &Summary) -> String {
     let mut t = String::from(
-        "| fault | collisions | min clearance mm | speed at fault rad/s | fault to hold ms | fault to rest s | travel / arrest distance from the hold (from the fault) | held by | faults recorded |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| fault | collisions | min clearance mm | speed at fault rad/s | fault to hold ms | fault to rest s | travel / arrest distance from the fault (from the hold) | held by | faults recorded |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &s.results {
         t.push_str(&format!(
@@ -289,7 +290,7 @@ pub fn table(s: &Summary) -> String {
                 .map_or("-".into(), |x| format!("{:.0}", x * 1e3)),
             r.time_to_rest_s
                 .map_or("moving".into(), |x| format!("{x:.3}")),
-            match (r.travel_over_arrest, r.travel_over_arrest_at_fault) {
+            match (r.travel_over_arrest_at_fault, r.travel_over_arrest) {
                 (Some(a), Some(b)) =>
                     format!("{:.2}, {:.2} ({:.2}, {:.2})", a[0], a[1], b[0], b[1]),
                 _ => "carried on".into(),

@@ -22,7 +22,7 @@ fn every_fault_is_survived_without_a_collision_by_the_layer_below_it() {
         let board = r.scenario.rsplit('_').next().unwrap();
         match (r.scenario.split('_').next().unwrap(), board) {
             // A board that stops or dies mid-publish: the layer below holds the arm within
-            // the arrest distance published when it took over.
+            // the arrest distance the servo published when the fault struck.
             ("halt" | "bus" | "tear", "servo") => layer("brakes"),
             ("halt" | "bus" | "tear", "reflex") => layer("servo"),
             ("halt" | "bus" | "tear", _) => layer("reflex"),

@@ -42,6 +42,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod arrest_log;
 pub mod goal;
 pub mod health;
 pub mod masks;
@@ -116,6 +117,10 @@ pub const SERVO_STALE_PASSES: u32 = 20;
 pub const WAND_MOVE_UM: i32 = 1_000;
 /// A planner goal record unchanged for this long is stale: the reflex stops advancing.
 pub const PLANNER_STALE_US: u32 = 50_000;
+
+/// A hold for an input that went quiet looks up the arrest point this much earlier than the
+/// input's limit: its last change can precede the limit by a pass of its board and of ours.
+pub const LOG_MARGIN_US: u32 = 5_000;
 
 /// Bits of the published flags word (`ReflexSubgoal::flags`), defined with the record.
 pub use vme_map::records::reflex_flags as flags;
@@ -273,6 +278,9 @@ pub struct Reflex {
     escape_to: Option<[i32; 2]>,
     /// The wand position the goal was last computed from.
     wand_um: [i32; 2],
+    /// The arrest points of the last passes: a hold for an input that went quiet holds at
+    /// the arrest point of the moment it did.
+    log: arrest_log::ArrestLog,
 }
 
 impl Default for Reflex {
@@ -304,6 +312,7 @@ impl Reflex {
             stall_since_us: 0,
             escape_to: None,
             wand_um: [0; 2],
+            log: arrest_log::ArrestLog::new(),
         }
     }
 
@@ -351,6 +360,7 @@ impl Reflex {
         self.last_t_us = sv.t_us;
         self.now_us = sv.t_us;
         out.dt_us = dt_us;
+        self.log.push(sv.t_us, sv.arrest_urad);
 
         // The inputs must be good; until they first are, the arm holds without a fault.
         let problem = self.monitor.observe(&inp.health, self.now_us);
@@ -361,7 +371,16 @@ impl Reflex {
         }
         if let Some(p) = problem {
             if self.healthy_once || self.now_us.wrapping_sub(self.started_us) > health::STARTUP_US {
-                return self.hold_output(Fault::Input(p), sv.arrest_urad, out);
+                // An input that went quiet failed its limit ago: hold where the arm could
+                // have stopped then. A lagging image is a slow board, not a dead one: now.
+                let age = match p {
+                    Problem::MapStale => health::MAP_STALE_US + LOG_MARGIN_US,
+                    Problem::MapTorn => health::MAP_TORN_US + LOG_MARGIN_US,
+                    Problem::ObjectsStale => health::OBJECTS_STALE_US + LOG_MARGIN_US,
+                    Problem::MapLag => 0,
+                };
+                let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
+                return self.hold_output(Fault::Input(p), at, out);
             }
             out.subgoal_urad = Some(self.hold_point());
             out.flags = flags::WAITING;
@@ -378,7 +397,10 @@ impl Reflex {
                     self.planner_since_us = self.now_us;
                 }
                 if self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US {
-                    return self.hold_output(Fault::PlannerStale, sv.arrest_urad, out);
+                    // The arrest point of the planner's last fresh goal.
+                    let age = self.now_us.wrapping_sub(self.planner_since_us);
+                    let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
+                    return self.hold_output(Fault::PlannerStale, at, out);
                 }
                 self.goal = Some(goal_urad);
                 out.flags |= flags::FROM_PLANNER;
@@ -403,7 +425,10 @@ impl Reflex {
                 if self.planner_cycle.is_some()
                     && self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US
                 {
-                    return self.hold_output(Fault::PlannerStale, sv.arrest_urad, out);
+                    // The arrest point of the planner's last fresh goal.
+                    let age = self.now_us.wrapping_sub(self.planner_since_us);
+                    let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
+                    return self.hold_output(Fault::PlannerStale, at, out);
                 }
             }
         }

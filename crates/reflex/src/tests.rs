@@ -239,7 +239,7 @@ fn a_stuck_arm_is_flagged_stalled() {
 }
 
 #[test]
-fn a_stale_map_holds_the_arm_at_its_arrest_point_and_records_once() {
+fn a_stale_map_holds_the_arm_at_the_arrest_point_it_had_when_the_map_went_quiet() {
     let m = TestMap::new();
     let mut r = Reflex::default();
     let mut faults = Vec::new();
@@ -261,7 +261,11 @@ fn a_stale_map_holds_the_arm_at_its_arrest_point_and_records_once() {
         );
         if let Some(f) = o.new_fault {
             faults.push((k, f));
-            last = Some(sv.arrest_urad);
+            // The arrest point of the moment the map went quiet: the pass MAP_STALE_US +
+            // LOG_MARGIN_US (35 passes) before the one that noticed.
+            let k0 = k - 35;
+            last =
+                Some(servo_at([1.0 + 0.02 * k0 as f64 / 100.0, 0.0], [20.0, 0.0], k0).arrest_urad);
         }
         if k > 85 {
             assert_ne!(o.flags & flags::HOLD, 0, "pass {k}");

@@ -23,6 +23,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod arrest_log;
 pub mod consts;
 pub use fx;
 pub mod params;
@@ -467,6 +468,9 @@ pub struct Servo {
     since_start_q32: i32,
     hold_goal_q16: Option<[i32; 2]>,
     hold: Option<Hold>,
+    /// The arrest points of the last passes: a hold for a subgoal that stopped coming holds
+    /// at the arrest point of the moment it stopped.
+    log: arrest_log::ArrestLog,
 }
 
 impl Default for Servo {
@@ -507,6 +511,7 @@ impl Servo {
             since_start_q32: 0,
             hold_goal_q16: None,
             hold: None,
+            log: arrest_log::ArrestLog::new(),
         }
     }
 
@@ -554,6 +559,7 @@ impl Servo {
         ];
 
         // The goal: the subgoal while it is fresh and plausible, else hold at the arrest point.
+        self.log.push(dt_q32, arrest);
         let (goal, new_fault) = self.choose_goal(input.subgoal, dt_q32, arrest, first);
 
         let mut out = Output {
@@ -639,7 +645,10 @@ impl Servo {
     ) -> ([i32; 2], Option<Hold>) {
         let verdict = match sub {
             None if self.last_cycle.is_none() => Err(Hold::NoSubgoal),
-            None => Err(Hold::Torn),
+            None => {
+                self.since_cycle_q32 = self.since_cycle_q32.saturating_add(dt_q32);
+                Err(Hold::Torn)
+            }
             Some(s) => {
                 if self.last_cycle != Some(s.cycle) {
                     self.last_cycle = Some(s.cycle);
@@ -666,7 +675,16 @@ impl Servo {
                 (g, None)
             }
             Err(why) => {
-                let goal = *self.hold_goal_q16.get_or_insert(arrest);
+                // Subgoals that stopped coming (stale, or torn since): the arrest point of
+                // the last fresh one. A bad subgoal: the arrest point now.
+                if self.hold_goal_q16.is_none() {
+                    let age = match why {
+                        Hold::Stale | Hold::Torn => self.since_cycle_q32,
+                        _ => 0,
+                    };
+                    self.hold_goal_q16 = Some(self.log.at_age(age, arrest));
+                }
+                let goal = self.hold_goal_q16.unwrap_or(arrest);
                 // A fault is new when the reason changes; waiting for a first subgoal is none.
                 // (Written as a match: the boolean form compiled to CMP + SUBX, which reads a
                 // stale X flag on the 68k; docs/toolchain.md.)
