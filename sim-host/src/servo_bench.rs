@@ -713,7 +713,7 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
         /// From any start state within the speed limits from which the goal can be reached
         /// without overshoot (braking at 80% of umax on the heaviest plant, after 20 ms for the
         /// observer to lock), the closed loop with the plant reaches the goal within 2 counts

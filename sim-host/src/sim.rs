@@ -260,7 +260,7 @@ enum Code {
 enum Native {
     Sensing(Box<board_sensing::Board>),
     Cspace(board_cspace::Board),
-    Servo(board_servo::Board),
+    Servo(Box<board_servo::Board>),
     Reflex(Box<board_reflex::Board>),
     Planner(Box<board_planner::Board>),
 }
@@ -269,7 +269,7 @@ impl Native {
     fn new(id: BoardId, planner: planner::Config) -> Self {
         match id {
             BoardId::Sensing => Native::Sensing(Box::new(board_sensing::Board::new())),
-            BoardId::Servo => Native::Servo(board_servo::Board::new()),
+            BoardId::Servo => Native::Servo(Box::new(board_servo::Board::new())),
             BoardId::Reflex => Native::Reflex(Box::new(board_reflex::Board::new())),
             BoardId::Planner => {
                 Native::Planner(Box::new(board_planner::Board::with_config(planner)))

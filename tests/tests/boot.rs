@@ -28,7 +28,9 @@ fn all_five_images_boot_and_their_heartbeats_advance() {
 #[test]
 fn a_bus_error_is_recorded_in_the_status_record_and_the_board_halts() {
     let mut sys = System::power_up(&images_dir(), &FIVE).unwrap();
-    sys.run_ms(1.0);
+    // A board takes host commands posted after its boot (it starts from the serial it
+    // finds): wait for its first heartbeat.
+    run_until_beating(&mut sys, BoardId::Reflex);
     sys.host_command(host_cmd::INJECT_BUS_ERROR, BoardId::Reflex);
     // The reflex acts on host commands once per main-loop pass, and with the servo
     // publishing its pass runs the whole window (2-3 ms on the 68020, `sim-host bench
@@ -66,7 +68,7 @@ fn a_bus_error_is_recorded_in_the_status_record_and_the_board_halts() {
 #[test]
 fn a_panic_writes_its_message_to_the_log_ring_and_safe_stops() {
     let mut sys = System::power_up(&images_dir(), &FIVE).unwrap();
-    sys.run_ms(1.0);
+    run_until_beating(&mut sys, BoardId::Servo);
     sys.host_command(host_cmd::INJECT_PANIC, BoardId::Servo);
     sys.run_ms(3.0);
     let st = sys.status(BoardId::Servo);
@@ -117,4 +119,15 @@ fn a_board_waits_for_the_global_ram_header_and_says_why() {
         sys.status(BoardId::Planner).state(),
         Some(BoardState::Running)
     );
+}
+
+/// Runs the system until `board` has beaten (within 20 ms).
+fn run_until_beating(sys: &mut System, board: BoardId) {
+    for _ in 0..200 {
+        if sys.heartbeat(board) != 0 {
+            return;
+        }
+        sys.run_ms(0.1);
+    }
+    panic!("{} never beat", board.name());
 }

@@ -17,7 +17,13 @@ const PERIOD_TICKS: u16 = (regs::servo::TIMER_HZ as f64 / IMAGE_HZ + 0.5) as u16
 fn main() -> ! {
     // SAFETY: this image runs on a board that maps global RAM and its private I/O.
     let (mut g, mut io) = unsafe { (MmioGlobal::new(), MmioIo::new()) };
-    let mut board = Board::with_links(&TUNED_AT_IMAGE_HZ);
+    // The board's state (with its 1.5 KiB arrest log) is built at compile time into .data,
+    // which the runtime copies at reset, instead of on the stack here (built and moved at
+    // ~30 cycles a byte: 2.8 ms more before the first heartbeat).
+    static mut BOARD: Board = Board::with_links(&TUNED_AT_IMAGE_HZ);
+    // SAFETY: main runs once and is the only code that touches BOARD (the safe-stop hook
+    // uses only the private I/O).
+    let board = unsafe { &mut *core::ptr::addr_of_mut!(BOARD) };
     board.boot(&mut g, &mut io);
     let mut start = ServoIo::new(&mut io).timer();
     loop {

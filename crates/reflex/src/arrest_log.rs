@@ -19,6 +19,8 @@ pub struct ArrestLog {
     t_us: [u32; PASSES],
     arrest_urad: [[i32; 2]; PASSES],
     n: u32,
+    /// Entries kept, up to [`PASSES`].
+    kept: u32,
 }
 
 impl Default for ArrestLog {
@@ -34,6 +36,7 @@ impl ArrestLog {
             t_us: [0; PASSES],
             arrest_urad: [[0; 2]; PASSES],
             n: 0,
+            kept: 0,
         }
     }
 
@@ -45,6 +48,9 @@ impl ArrestLog {
         self.t_us[i] = t_us;
         self.arrest_urad[i] = arrest_urad;
         self.n = self.n.wrapping_add(1);
+        // Up to PASSES without a compare (a compare and a branch drew a condition-code
+        // clobber from LLVM's M68k backend; docs/toolchain.md).
+        self.kept = self.kept + 1 - (self.kept >> 7);
     }
 
     /// The arrest point of the newest pass at least `age_us` before `now_us`; the oldest
@@ -52,7 +58,7 @@ impl ArrestLog {
     /// iterations and sign masks, no data-dependent exit (docs/toolchain.md).
     #[inline(never)]
     pub fn at_age(&self, now_us: u32, age_us: u32, fallback: [i32; 2]) -> [i32; 2] {
-        let kept = self.n.min(PASSES as u32) as i32;
+        let kept = self.kept as i32;
         let (mut a0, mut a1) = (fallback[0], fallback[1]);
         let mut found = 0i32;
         let mut k = 0i32;

@@ -122,6 +122,18 @@ pub const PLANNER_STALE_US: u32 = 50_000;
 /// input's limit: its last change can precede the limit by a pass of its board and of ours.
 pub const LOG_MARGIN_US: u32 = 5_000;
 
+/// How long before a problem is noticed its input went quiet, by [`Problem`] (a table, not a
+/// match: the compares drew a condition-code clobber; docs/toolchain.md). A lagging image
+/// is a slow board, not a dead one: 0, the arrest point now.
+const QUIET_AGE_US: [u32; 4] = {
+    let mut t = [0; 4];
+    t[Problem::MapStale as usize] = health::MAP_STALE_US + LOG_MARGIN_US;
+    t[Problem::MapLag as usize] = 0;
+    t[Problem::MapTorn as usize] = health::MAP_TORN_US + LOG_MARGIN_US;
+    t[Problem::ObjectsStale as usize] = health::OBJECTS_STALE_US + LOG_MARGIN_US;
+    t
+};
+
 /// Bits of the published flags word (`ReflexSubgoal::flags`), defined with the record.
 pub use vme_map::records::reflex_flags as flags;
 
@@ -360,7 +372,6 @@ impl Reflex {
         self.last_t_us = sv.t_us;
         self.now_us = sv.t_us;
         out.dt_us = dt_us;
-        self.log.push(sv.t_us, sv.arrest_urad);
 
         // The inputs must be good; until they first are, the arm holds without a fault.
         let problem = self.monitor.observe(&inp.health, self.now_us);
@@ -373,12 +384,7 @@ impl Reflex {
             if self.healthy_once || self.now_us.wrapping_sub(self.started_us) > health::STARTUP_US {
                 // An input that went quiet failed its limit ago: hold where the arm could
                 // have stopped then. A lagging image is a slow board, not a dead one: now.
-                let age = match p {
-                    Problem::MapStale => health::MAP_STALE_US + LOG_MARGIN_US,
-                    Problem::MapTorn => health::MAP_TORN_US + LOG_MARGIN_US,
-                    Problem::ObjectsStale => health::OBJECTS_STALE_US + LOG_MARGIN_US,
-                    Problem::MapLag => 0,
-                };
+                let age = QUIET_AGE_US[p as usize];
                 let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
                 return self.hold_output(Fault::Input(p), at, out);
             }
@@ -437,6 +443,8 @@ impl Reflex {
             self.last = Some(self.hold_at);
         }
         let goal = self.goal.unwrap_or(self.last.unwrap_or(sv.arrest_urad));
+        // Logged only on passes that got this far (a pass that holds needs no log).
+        self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
         self.window(sv, goal, dt_us, inp.obstacles_moving, map, &mut out);
         out

@@ -533,7 +533,10 @@ impl Servo {
                 self.counts[i] = input.enc[i] as i16 as i32;
             }
             self.last_enc[i] = input.enc[i];
-            *t = mul_shr(self.counts[i], self.links[i].rad_per_count_q32, 16);
+            // The middle of the count: the link is somewhere in [n, n + 1) counts, so the
+            // count's floor is biased by half a count (with the goal's dead band of a count,
+            // the link parked up to two counts off the goal).
+            *t = mul_shr(2 * self.counts[i] + 1, self.links[i].rad_per_count_q32, 17);
         }
         let ticks = input.timer.wrapping_sub(self.last_timer);
         self.last_timer = input.timer;
@@ -678,11 +681,12 @@ impl Servo {
                 // Subgoals that stopped coming (stale, or torn since): the arrest point of
                 // the last fresh one. A bad subgoal: the arrest point now.
                 if self.hold_goal_q16.is_none() {
-                    let age = match why {
-                        Hold::Stale | Hold::Torn => self.since_cycle_q32,
-                        _ => 0,
-                    };
-                    self.hold_goal_q16 = Some(self.log.at_age(age, arrest));
+                    // (No look-up for the others: it costs ~44,000 cycles, which the first
+                    // pass, waiting for a first subgoal, would add to the start-up.)
+                    self.hold_goal_q16 = Some(match why {
+                        Hold::Stale | Hold::Torn => self.log.at_age(self.since_cycle_q32, arrest),
+                        _ => arrest,
+                    });
                 }
                 let goal = self.hold_goal_q16.unwrap_or(arrest);
                 // A fault is new when the reason changes; waiting for a first subgoal is none.

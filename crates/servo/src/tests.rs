@@ -272,7 +272,8 @@ fn the_first_pass_only_initialises() {
     assert_eq!(o.dac, [0, 0]);
     assert_eq!(
         s.observers()[0].theta_q16(),
-        fx::mul_shr(1000, K1.rad_per_count_q32, 16)
+        // The middle of count 1000.
+        fx::mul_shr(2 * 1000 + 1, K1.rad_per_count_q32, 17)
     );
 }
 
