@@ -108,6 +108,7 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
     let mut last_servo = None;
     let mut at_hold: Option<([f64; 2], [f64; 2], f64)> = None; // theta, arrest, time
     let mut was_held = false;
+    let mut was_reflex_hold = false;
     let mut last_moving_s = fault_s;
     let servo_faults0 = BoardSlot::of(BoardId::Servo)
         .status_word(&mut sim.bus())
@@ -143,9 +144,12 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
             let now = (t * crate::emu::CPU_HZ as f64) as u64;
             let braked = sim.servo_io.outputs(now).1.iter().all(|&b| b);
             let mut g = sim.bus();
-            let reflex_hold = vme_map::REFLEX_SUBGOAL
-                .read(&mut g)
-                .is_ok_and(|r| r.0.flags & reflex_flags::HOLD != 0);
+            // A record the host meets mid-publish (image mode) leaves the flag as it was.
+            let reflex_hold = match vme_map::REFLEX_SUBGOAL.read(&mut g) {
+                Ok((r, _)) => r.flags & reflex_flags::HOLD != 0,
+                Err(_) => was_reflex_hold,
+            };
+            was_reflex_hold = reflex_hold;
             let servo = BoardSlot::of(BoardId::Servo).status_word(&mut g);
             let servo_hold = servo.faults() != servo_faults0
                 && servo.state() == Some(vme_map::BoardState::Degraded);
