@@ -147,8 +147,18 @@ servo_theta1_urad,servo_theta2_urad,servo_arrest1_urad,servo_arrest2_urad,reflex
     h
 }
 
-/// One trace row at the simulation's current time.
-pub fn trace_row(sim: &mut Sim, out: &mut String) {
+/// The records last read whole, for trace rows that meet one mid-publish (in image mode
+/// the boards run between the host's reads and a record can be half written then).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LastRecords {
+    servo: vme_map::records::ServoState,
+    reflex: vme_map::records::ReflexSubgoal,
+    planner: vme_map::records::PlannerGoal,
+}
+
+/// One trace row at the simulation's current time; a record read torn repeats its last
+/// whole value from `last`.
+pub fn trace_row(sim: &mut Sim, last: &mut LastRecords, out: &mut String) {
     let t = sim.t_s();
     let l = &sim.plant.links;
     let (a, b) = (l[0].state, l[1].state);
@@ -173,18 +183,16 @@ pub fn trace_row(sim: &mut Sim, out: &mut String) {
     );
     let stats = sim.board_stats();
     let mut g = sim.bus();
-    let servo = vme_map::SERVO_STATE
-        .read(&mut g)
-        .map(|r| r.0)
-        .unwrap_or_default();
-    let reflex = vme_map::REFLEX_SUBGOAL
-        .read(&mut g)
-        .map(|r| r.0)
-        .unwrap_or_default();
-    let planner = vme_map::PLANNER_GOAL
-        .read(&mut g)
-        .map(|r| r.0)
-        .unwrap_or_default();
+    if let Ok((r, _)) = vme_map::SERVO_STATE.read(&mut g) {
+        last.servo = r;
+    }
+    if let Ok((r, _)) = vme_map::REFLEX_SUBGOAL.read(&mut g) {
+        last.reflex = r;
+    }
+    if let Ok((r, _)) = vme_map::PLANNER_GOAL.read(&mut g) {
+        last.planner = r;
+    }
+    let (servo, reflex, planner) = (last.servo, last.reflex, last.planner);
     let _ = write!(
         out,
         ",{},{},{},{},{},{},{:#x},{},{},{:#x},{}",
@@ -333,11 +341,12 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     let mut trace = trace_header(&sim);
     let start = Instant::now();
     let mut samples = vec![sample(&mut sim)];
-    trace_row(&mut sim, &mut trace);
+    let mut last = LastRecords::default();
+    trace_row(&mut sim, &mut last, &mut trace);
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(opts.trace_every) {
-            trace_row(&mut sim, &mut trace);
+            trace_row(&mut sim, &mut last, &mut trace);
             samples.push(sample(&mut sim));
         }
         if sim.steps.is_multiple_of(frame_every) {
