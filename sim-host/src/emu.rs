@@ -262,8 +262,8 @@ pub enum Stop {
 }
 
 impl EmuBoard {
-    /// Loads `image` into a fresh board's local RAM and resets the CPU
-    /// (which fetches the initial stack pointer and PC from the image's vector table).
+    /// Loads `image` into a fresh board's local RAM and resets the CPU (which fetches the
+    /// initial stack pointer and PC from the image's vector table).
     pub fn new(id: BoardId, image: &Image, io: Box<dyn Device>, global: &mut [u8]) -> Self {
         let mut cpu = CpuCore::new();
         cpu.set_cpu_type(CpuType::M68020);
@@ -271,11 +271,10 @@ impl EmuBoard {
         // section 6), so the boards are modelled without a coprocessor: a stray 68881
         // instruction takes the line-F exception instead of running on absent hardware.
         cpu.fpu_present = false;
-        let ram = image.to_ram();
         let mut b = Self {
             id,
             cpu,
-            ram,
+            ram: image.to_ram(),
             io,
             cycles: 0,
             instructions: 0,
@@ -318,7 +317,6 @@ impl EmuBoard {
         breaks: &[u32],
     ) -> Stop {
         let beat_addr = beat_addr(self.id);
-        let mut first = true;
         while self.state == RunState::Running && self.cycles < until {
             let left = (until - self.cycles).min(i32::MAX as u64) as i32;
             let dev: &mut dyn Device = match io.as_deref_mut() {
@@ -333,30 +331,18 @@ impl EmuBoard {
                 beat_addr,
                 beats: &mut self.beats,
             };
-            if !first && breaks.contains(&self.cpu.pc) {
-                return Stop::Breakpoint;
-            }
-            first = false;
             let sp = &mut self.lowest_sp;
-            let r = if breaks.is_empty() {
-                self.cpu
-                    .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
-                        bus.now += c as u64;
-                        *sp = (*sp).min(cpu.dar[15]);
+            let r = self
+                .cpu
+                .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
+                    bus.now += c as u64;
+                    *sp = (*sp).min(cpu.dar[15]);
+                    if breaks.contains(&cpu.pc) {
+                        m68k::CycleBatchControl::Return
+                    } else {
                         m68k::CycleBatchControl::Continue
-                    })
-            } else {
-                self.cpu
-                    .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
-                        bus.now += c as u64;
-                        *sp = (*sp).min(cpu.dar[15]);
-                        if breaks.contains(&cpu.pc) {
-                            m68k::CycleBatchControl::Return
-                        } else {
-                            m68k::CycleBatchControl::Continue
-                        }
-                    })
-            };
+                    }
+                });
             self.cycles += r.cycles.max(0) as u64;
             self.instructions += r.instructions as u64;
             bus.now = self.t0 + self.cycles;
@@ -365,7 +351,7 @@ impl EmuBoard {
             if halted {
                 self.state = RunState::Halted;
             }
-            if !breaks.is_empty() && breaks.contains(&self.cpu.pc) && self.cycles < until {
+            if breaks.contains(&self.cpu.pc) && self.cycles < until {
                 return Stop::Breakpoint;
             }
         }
@@ -383,32 +369,9 @@ impl EmuBoard {
 
     /// [`Self::step`] with devices lent by a simulation (see [`Self::run_until`]).
     pub fn step_with(&mut self, global: &mut [u8], io: Option<&mut dyn Device>) -> u64 {
-        if self.state != RunState::Running {
-            return 0;
-        }
         let before = self.cycles;
-        let dev: &mut dyn Device = match io {
-            Some(d) => d,
-            None => &mut *self.io,
-        };
-        let mut bus = BoardBus {
-            ram: &mut self.ram,
-            global: &mut *global,
-            io: dev,
-            now: self.t0 + self.cycles,
-            beat_addr: beat_addr(self.id),
-            beats: &mut self.beats,
-        };
-        let r = self.cpu.run_for_cycles(&mut bus, 1);
-        self.cycles += r.cycles.max(0) as u64;
-        self.instructions += r.instructions as u64;
-        self.lowest_sp = self.lowest_sp.min(self.cpu.dar[15]);
-        bus.now = self.t0 + self.cycles;
-        let (c, halted) = take_surfaced(&mut self.cpu, &mut bus, r.exit);
-        self.cycles += c;
-        if halted {
-            self.state = RunState::Halted;
-        }
+        // A budget of one cycle runs exactly one whole instruction (or exception entry).
+        self.run_until(global, io, before + 1, &[]);
         self.cycles - before
     }
 
