@@ -130,10 +130,7 @@ pub fn live_frame(g: &mut ArrayBus, t: f64, last: &mut [f64; 2]) -> Frame {
             }
         }
     }
-    let goal = match vme_map::REFLEX_STATUS.read(g) {
-        Ok((r, seq)) if seq != 0 => Some([r.goal1_urad as f64 * 1e-6, r.goal2_urad as f64 * 1e-6]),
-        _ => None,
-    };
+    let goal = crate::run::reflex_goal(g);
     let marked = crate::run::marked_in(g);
     Frame {
         t,

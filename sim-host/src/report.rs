@@ -34,10 +34,7 @@ pub struct Frame {
 pub fn frame(sim: &mut Sim) -> Frame {
     let t = sim.t_s();
     let bits = pack(&crate::run::marked_pixels(sim));
-    let goal = match vme_map::REFLEX_STATUS.read(&mut sim.bus()) {
-        Ok((r, seq)) if seq != 0 => Some([r.goal1_urad as f64 * 1e-6, r.goal2_urad as f64 * 1e-6]),
-        _ => None,
-    };
+    let goal = crate::run::reflex_goal(&mut sim.bus());
     Frame {
         t,
         q: sim.plant.angles_rad(),

@@ -241,6 +241,15 @@ pub fn marked_pixels(sim: &mut Sim) -> Vec<bool> {
     marked_in(&mut sim.bus())
 }
 
+/// The goal the reflex is using (absolute rad), from its status record in global RAM `g`;
+/// `None` before it has published one or when the record reads torn.
+pub fn reflex_goal(g: &mut impl GlobalBus) -> Option<[f64; 2]> {
+    match vme_map::REFLEX_STATUS.read(g) {
+        Ok((r, seq)) if seq != 0 => Some([r.goal1_urad as f64 * 1e-6, r.goal2_urad as f64 * 1e-6]),
+        _ => None,
+    }
+}
+
 /// The C-space map in global RAM `g`: which pixels are marked (`[i2 * 128 + i1]`).
 pub fn marked_in(g: &mut impl GlobalBus) -> Vec<bool> {
     use vme_map::layout::{cspace_counter, CSPACE_STRIPES};
@@ -396,12 +405,7 @@ impl End {
     pub fn of(sim: &mut Sim) -> Self {
         let t = sim.t_s();
         let disks: Vec<_> = sim.cfg.obstacles.iter().map(|o| o.at(t)).collect();
-        let goal = match vme_map::REFLEX_STATUS.read(&mut sim.bus()) {
-            Ok((r, seq)) if seq != 0 => {
-                Some([r.goal1_urad as f64 * 1e-6, r.goal2_urad as f64 * 1e-6])
-            }
-            _ => None,
-        };
+        let goal = reflex_goal(&mut sim.bus());
         End {
             marked: marked_pixels(sim),
             exact: exact_pixels(&disks),
