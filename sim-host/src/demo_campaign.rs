@@ -55,10 +55,7 @@ pub fn scenario_path() -> PathBuf {
 pub fn run_seed(sc: &Scenario, seed: u64, images: Option<&Path>) -> Result<SeedResult, String> {
     let mut cfg = sc.config.clone();
     cfg.seed = seed;
-    let mut sim = match images {
-        Some(d) => Sim::with_images(cfg, d).map_err(|e| e.to_string())?,
-        None => Sim::new(cfg),
-    };
+    let mut sim = Sim::in_mode(cfg, images).map_err(|e| e.to_string())?;
     while !sim.done() {
         sim.step();
     }

@@ -213,18 +213,12 @@ fn main() -> ExitCode {
             }
         },
         Cmd::Demo { seed, run } => {
-            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/demo.toml");
-            match Scenario::load(&path) {
+            match Scenario::load(&sim_host::demo_campaign::scenario_path()) {
                 Ok(mut sc) => {
                     if let Some(seed) = seed {
                         sc.config.seed = seed;
                     }
-                    let out = run.out.clone().unwrap_or_else(|| PathBuf::from("out/demo"));
-                    let code = run_cmd(&sc, run, "out/demo");
-                    if code == ExitCode::SUCCESS {
-                        println!("open {} in a browser", out.join("report.html").display());
-                    }
-                    code
+                    run_cmd(&sc, run, "out/demo")
                 }
                 Err(e) => {
                     eprintln!("sim-host: {e}");
@@ -773,6 +767,7 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
                 "wrote trace.csv, summary.json, joints.png, task.png, cspace.png and report.html to {}",
                 out.display()
             );
+            println!("open {} in a browser", out.join("report.html").display());
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -234,8 +234,7 @@ pub enum FaultKind {
     /// The board stops in the middle of publishing its main record: it halts, and the
     /// record is left with half its words written and its sequence odd (the sensing
     /// board's object table, the servo's state, the reflex's subgoal, the planner's goal;
-    /// a C-space board has no record of its own and halts mid-way through its work-list
-    /// entry instead).
+    /// a C-space board has no record of its own and only halts).
     Tear,
 }
 
@@ -349,8 +348,6 @@ pub struct BoardStats {
     pub loop_us: Option<(f64, f64, f64)>,
     /// Image mode: the stack's high-water mark (bytes).
     pub stack_bytes: Option<u32>,
-    /// Image mode: CPU cycles executed.
-    pub cycles: Option<u64>,
 }
 
 /// Collision figures from the oracle.
@@ -405,6 +402,14 @@ impl Sim {
     pub fn with_images(cfg: Config, images: &Path) -> Result<Self, ImageError> {
         let all: Vec<BoardId> = cfg.boards.iter().map(|b| b.0).collect();
         Self::build(cfg, Some((images, &all)))
+    }
+
+    /// Native mode without `images`, image mode ([`Self::with_images`]) with them.
+    pub fn in_mode(cfg: Config, images: Option<&Path>) -> Result<Self, ImageError> {
+        match images {
+            Some(dir) => Self::with_images(cfg, dir),
+            None => Ok(Self::new(cfg)),
+        }
     }
 
     /// Mixed mode: the boards in `which` as their images (as [`Self::with_images`]), the
@@ -844,7 +849,6 @@ impl Sim {
                     halted: s.halted,
                     loop_us: None,
                     stack_bytes: None,
-                    cycles: None,
                 },
                 Code::Image(b) => BoardStats {
                     board: s.id,
@@ -853,7 +857,6 @@ impl Sim {
                     halted: s.halted,
                     loop_us: b.beats.period_us(),
                     stack_bytes: b.stack_high_water(),
-                    cycles: Some(b.cycles),
                 },
             })
             .collect()
