@@ -97,14 +97,11 @@ fn fault_time(sc: &Scenario) -> f64 {
 
 /// Runs one fault scenario (images from `images` when given).
 pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<FaultResult, String> {
-    let mut sim = match images {
-        Some(d) => Sim::with_images(sc.config.clone(), d).map_err(|e| e.to_string())?,
-        None => Sim::new(sc.config.clone()),
-    };
+    let mut sim = Sim::in_mode(sc.config.clone(), images).map_err(|e| e.to_string())?;
     let fault_s = fault_time(sc);
-    // The servo's last whole state before the fault (the fault may tear it).
-    let mut before: Option<([f64; 2], [f64; 2], [f64; 2])> = None; // theta, arrest, speed
-    let mut at_fault = None;
+    // The arm and the servo's last whole arrest point as the fault strikes (the fault may
+    // tear the servo's record).
+    let mut at_fault: Option<([f64; 2], [f64; 2], [f64; 2])> = None; // theta, arrest, speed
     let mut last_servo = None;
     let mut at_hold: Option<([f64; 2], [f64; 2], f64)> = None; // theta, arrest, time
     let mut was_held = false;
@@ -114,19 +111,10 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
         .status_word(&mut sim.bus())
         .faults();
     while !sim.done() {
-        if sim.t_s() + sim.cfg.dt_s <= fault_s {
-            if let Ok((s, seq)) = vme_map::SERVO_STATE.read(&mut sim.bus()) {
-                if seq != 0 {
-                    let l = &sim.plant.links;
-                    before = Some((
-                        sim.plant.angles_rad(),
-                        [s.arrest1_urad as f64 * 1e-6, s.arrest2_urad as f64 * 1e-6],
-                        [l[0].state.link_rad_s, l[1].state.link_rad_s],
-                    ));
-                }
-            }
-        } else if at_fault.is_none() {
-            at_fault = before;
+        if at_fault.is_none() && sim.t_s() + sim.cfg.dt_s > fault_s {
+            let l = &sim.plant.links;
+            let w = [l[0].state.link_rad_s, l[1].state.link_rad_s];
+            at_fault = last_servo.map(|a| (sim.plant.angles_rad(), a, w));
         }
         sim.step();
         let l = &sim.plant.links;
