@@ -12,8 +12,9 @@
 //! Global RAM is modelled without VME wait states (the emulator bills the 68020's cache-case
 //! instruction times), so the cycle counts are a lower bound for a real VME map.
 
-use crate::boot::System;
+use crate::boot::{FunctionCycles, System};
 use crate::emu::{RunState, CPU_HZ};
+use crate::image::Image;
 use cspace::worklist::{JOB_SHIFT, OBSTACLE_BEACONS};
 use std::path::Path;
 use vme_map::layout::work_entry;
@@ -21,12 +22,14 @@ use vme_map::records::{beacon_flags, ObjectTable};
 use vme_map::{BoardId, GlobalBus};
 
 /// Cycles of one obstacle update at one radius.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Update {
     /// Radius of the obstacle's centre, mm.
     pub r_mm: f64,
     /// CPU cycles from claim to release.
     pub cycles: u64,
+    /// Those cycles by function, costliest first.
+    pub functions: Vec<(String, u64)>,
 }
 
 fn publish(sys: &mut System, t: &ObjectTable) {
@@ -49,14 +52,19 @@ fn table(frame: u32, t_us: u32, obstacles: &[(i32, i32)]) -> ObjectTable {
 }
 
 /// Steps board 0 until entry 0 has been claimed and released again, returning the cycles
-/// the claim was held (within `limit` cycles; `None` if it never completed).
-fn time_job(sys: &mut System, limit: u64) -> Option<u64> {
+/// the claim was held (within `limit` cycles; `None` if it never completed), charging them
+/// to the image's functions in `per`.
+fn time_job(sys: &mut System, limit: u64, per: &mut FunctionCycles) -> Option<u64> {
     let claim = work_entry(0);
     let b = &mut sys.boards[0];
     let end = b.cycles + limit;
     let mut start = None;
     while b.cycles < end && b.state == RunState::Running {
-        b.step(&mut sys.global);
+        let pc = b.cpu.pc;
+        let c = b.step(&mut sys.global);
+        if start.is_some() {
+            per.charge(pc, c);
+        }
         let held = vme_map::ArrayBus::new(&mut sys.global).read_u32(claim) != 0;
         match (start, held) {
             (None, true) => start = Some(b.cycles),
@@ -73,6 +81,8 @@ pub fn updates(dir: &Path, radii_mm: &[f64]) -> Result<Vec<Update>, String> {
     let mut sys = System::power_up(dir, &[BoardId::Cspace0]).map_err(|e| e.to_string())?;
     sys.run_to_first_heartbeat(0)
         .ok_or("the cspace image never beat")?;
+    let image = Image::load(&dir.join("cspace.elf")).map_err(|e| e.to_string())?;
+    let mut per = FunctionCycles::new(&image);
     let mut out = Vec::new();
     let mut frame = 0;
     for &r in radii_mm {
@@ -85,9 +95,15 @@ pub fn updates(dir: &Path, radii_mm: &[f64]) -> Result<Vec<Update>, String> {
                 let rr = r + step as f64;
                 let p = ((rr * c * 1e3) as i32, (rr * s * 1e3) as i32);
                 publish(&mut sys, &table(frame, frame * 10_000_000, &[p]));
-                let cycles = time_job(&mut sys, CPU_HZ).ok_or(format!("no job at r = {r} mm"))?;
+                per.clear();
+                let cycles =
+                    time_job(&mut sys, CPU_HZ, &mut per).ok_or(format!("no job at r = {r} mm"))?;
                 if step == 1 {
-                    out.push(Update { r_mm: r, cycles });
+                    out.push(Update {
+                        r_mm: r,
+                        cycles,
+                        functions: per.top(),
+                    });
                 }
             }
         }
@@ -211,6 +227,16 @@ pub fn report(dir: &Path) -> Result<String, String> {
         mean,
         ms(mean)
     );
+    let _ = writeln!(o, "  the worst update's costliest functions:");
+    for (name, c) in worst.functions.iter().take(8) {
+        let _ = writeln!(
+            o,
+            "  {:>10} {:5.1}%  {}",
+            c,
+            100.0 * *c as f64 / worst.cycles as f64,
+            crate::planner_bench::demangle_short(name)
+        );
+    }
     let _ = writeln!(
         o,
         "refresh rate of 5 moving obstacles (redraws per obstacle per second, 3 s emulated):"

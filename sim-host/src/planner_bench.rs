@@ -280,7 +280,7 @@ pub fn report(dir: &Path) -> Result<String, String> {
 
 /// A symbol's demangled path without its crate hashes and generic arguments, its last two
 /// segments (`Fill::work`).
-fn demangle_short(n: &str) -> String {
+pub fn demangle_short(n: &str) -> String {
     let mut full = format!("{:#}", rustc_demangle::demangle(n));
     // `<planner::fill::Fill>::work`: the type in brackets is the path, not a generic.
     if let Some(rest) = full.strip_prefix('<') {

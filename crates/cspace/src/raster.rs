@@ -30,6 +30,17 @@ pub trait Canvas {
     fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags;
     /// Applies `op` to the counters `mask` of stripe-layer column `i1` in `0..128`.
     fn stripe(&mut self, i1: u32, mask: u32, op: Op) -> Flags;
+    /// Applies `op` to the counters `mask` of the `rows` pixels of column `i1` from row
+    /// `i2` up, rows wrapping modulo 128 (`rows` at most 128): a run of an image's column.
+    fn run(&mut self, i1: u32, i2: u32, rows: u32, mask: u32, op: Op) -> Flags {
+        let mut f = Flags::default();
+        let mut j = 0;
+        while j < rows {
+            f.merge(self.pixel(i1, i2.wrapping_add(j) & WRAP, mask, op));
+            j += 1;
+        }
+        f
+    }
 }
 
 #[inline(always)]
@@ -81,7 +92,35 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
         self.0.write_u32(a, v);
         f
     }
+    /// The plain words of the run in one [`GlobalBus::count_words`] call (an assembly loop
+    /// on the 68020), at most two pieces where the rows wrap; a word it stops at takes the
+    /// byte-by-byte update and the run goes on after it.
+    #[inline(never)]
+    fn run(&mut self, i1: u32, i2: u32, rows: u32, mask: u32, op: Op) -> Flags {
+        let mut f = Flags::default();
+        let down = op == Op::Erase;
+        let mut row = i2 & WRAP;
+        let mut left = rows;
+        while left > 0 {
+            // Rows up to the map's top edge in this piece.
+            let piece = left.min(CSPACE_SIDE - row);
+            let done = self
+                .0
+                .count_words(cspace_counter(i1, row, 0), piece, ROW_BYTES, mask, down);
+            row = (row + done) & WRAP;
+            left -= done;
+            if done < piece {
+                f.merge(self.pixel(i1, row, mask, op));
+                row = (row + 1) & WRAP;
+                left -= 1;
+            }
+        }
+        f
+    }
 }
+
+/// Bytes from a map pixel to the one a row above it.
+const ROW_BYTES: u32 = CSPACE_SIDE * vme_map::layout::CSPACE_COUNTERS;
 
 /// A whole map and stripe layer in memory, for host-side tools and tests (64.5 KiB; the
 /// boards use [`BusCanvas`] on global RAM instead).
@@ -207,10 +246,36 @@ struct Column {
     ends: u32,
 }
 
+/// Both chains' values at a strip edge, kept for the next column: a column's left edge is
+/// the last one's right edge, on the same segment unless a vertex lies on it, so most
+/// columns evaluate (and divide) at one edge instead of two.
+#[derive(Clone, Copy)]
+struct Edge {
+    /// Where (angle units).
+    t: i32,
+    /// On which segment.
+    k: usize,
+    /// The upper chain's value there, one unit outward.
+    upper: i32,
+    /// The lower chain's value there, one unit outward.
+    lower: i32,
+}
+
+impl Edge {
+    /// No edge yet.
+    const NONE: Edge = Edge {
+        t: i32::MIN,
+        k: usize::MAX,
+        upper: 0,
+        lower: 0,
+    };
+}
+
 /// The column `c` (unwrapped) of image `s` whose theta1 columns run `c0..=c1`; `k` is the
-/// chain segment holding the strip's left edge, advanced as the columns go.
+/// chain segment holding the strip's left edge, advanced as the columns go, and `edge` the
+/// last column's right edge.
 #[inline(never)]
-fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize) -> Column {
+fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize, edge: &mut Edge) -> Column {
     let t = &s.theta1_u;
     let n = t.len();
     let a = (c * UNITS_PER_PIXEL).max(t[0]);
@@ -219,10 +284,14 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize) -> Column {
     while *k + 2 < n && t[*k + 1] <= a {
         *k += 1;
     }
-    let (ua, la) = (
-        eval(t, &s.upper_u, *k, a, true),
-        eval(t, &s.lower_u, *k, a, false),
-    );
+    let (ua, la) = if edge.t == a && edge.k == *k {
+        (edge.upper, edge.lower)
+    } else {
+        (
+            eval(t, &s.upper_u, *k, a, true),
+            eval(t, &s.lower_u, *k, a, false),
+        )
+    };
     let (mut umax, mut umin, mut lmax, mut lmin) = (ua, ua, la, la);
     let mut j = *k;
     while j + 2 < n && t[j + 1] < b {
@@ -237,6 +306,12 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize) -> Column {
         eval(t, &s.upper_u, j, b, true),
         eval(t, &s.lower_u, j, b, false),
     );
+    *edge = Edge {
+        t: b,
+        k: j,
+        upper: ub,
+        lower: lb,
+    };
     umax = umax.max(ub);
     umin = umin.min(ub);
     lmax = lmax.max(lb);
@@ -264,41 +339,45 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize) -> Column {
     }
 }
 
-/// Updates the pixels of one column: the boundary rows one by one with their edge counters,
-/// the run between them with all four in a loop of its own (most pixels are inside). The
-/// masks are chosen without branches (sign arithmetic: every count is below 2^8), the selects
-/// the compiler made of the plain form clobbered the condition codes on the 68k
-/// (docs/toolchain.md).
+/// Updates the pixels of one column as at most five runs of rows with one set of counters
+/// each: the rows the lower chain crosses (with those the upper chain crosses too, where the
+/// two overlap), the interior with all four, the rows the upper chain crosses. Every row
+/// gets its edge counters plus the image's end counters, or all four inside; a full column
+/// is all interior. The bounds are taken without branches on compares (sign arithmetic:
+/// every count is below 2^8): the selects the compiler made of the plain form clobbered the
+/// condition codes on the 68k (docs/toolchain.md).
 #[inline(never)]
 fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
     let mut f = Flags::default();
     let rows = k.rows as i32;
     // All ones when the whole column is taken (every counter of every row).
     let full = ((CSPACE_SIDE as i32 - 1 - rows) >> 31) as u32;
+    let keep = !(full as i32);
     // Interior run [lo, hi): after the lower boundary rows, before the upper ones.
-    let lo = (k.lower_rows as i32).min(rows);
-    let hi = (k.upper_from as i32).max(lo).min(rows);
-    // A full column is all interior.
-    let (lo, hi) = (
-        lo & !(full as i32),
-        (hi & !(full as i32)) | (rows & full as i32),
-    );
-    let edge_row = |j: i32| {
-        let lower = ((j - k.lower_rows as i32) >> 31) as u32; // all ones below lower_rows
-        let upper = !(((j - k.upper_from as i32) >> 31) as u32); // all ones from upper_from
-        let m = (k.lower_mask & lower) | (k.upper_mask & upper);
-        let edge = (((m as i32).wrapping_neg()) >> 31) as u32;
-        ((m | k.ends) & edge) | (ALL & !edge)
+    let lo = (k.lower_rows as i32).min(rows) & keep;
+    let hi = ((k.upper_from as i32).max(lo).min(rows) & keep) | (rows & full as i32);
+    // Rows below `lo` are lower-chain rows, and upper-chain rows too from `upper_from`;
+    // rows from `hi` are upper-chain rows, and lower-chain rows too below `lower_rows`.
+    let upper_from = (k.upper_from as i32).min(lo);
+    let lower_to = (k.lower_rows as i32).max(hi).min(rows) & keep | (rows & full as i32);
+    let both = k.lower_mask | k.upper_mask | k.ends;
+    let first = k.first as u32;
+    let mut piece = |a: i32, b: i32, mask: u32| {
+        if b > a {
+            f.merge(canvas.run(
+                k.col,
+                first.wrapping_add(a as u32),
+                (b - a) as u32,
+                mask,
+                op,
+            ));
+        }
     };
-    for j in 0..lo {
-        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, edge_row(j), op));
-    }
-    for j in lo..hi {
-        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, ALL, op));
-    }
-    for j in hi..rows {
-        f.merge(canvas.pixel(k.col, (k.first + j) as u32 & WRAP, edge_row(j), op));
-    }
+    piece(0, upper_from, k.lower_mask | k.ends);
+    piece(upper_from, lo, both);
+    piece(lo, hi, ALL);
+    piece(hi, lower_to, both);
+    piece(lower_to, rows, k.upper_mask | k.ends);
     f
 }
 
@@ -316,8 +395,9 @@ pub fn shape<C: Canvas>(s: &Shape, canvas: &mut C, op: Op) -> Flags {
         (pix(t[0] - 1), pix(t[t.len() - 1] + 1))
     };
     let mut k = 0usize; // segment holding the strip's left edge
+    let mut edge = Edge::NONE;
     for c in c0..c1 + 1 {
-        let col = column(s, c, c0, c1, &mut k);
+        let col = column(s, c, c0, c1, &mut k, &mut edge);
         f.merge(paint(canvas, &col, op));
     }
     f

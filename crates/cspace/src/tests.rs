@@ -1,5 +1,7 @@
 use super::*;
 use proptest::prelude::*;
+use vme_map::layout::CSPACE_SIDE;
+use vme_map::GlobalBus;
 
 fn disk(x_mm: f64, y_mm: f64, r_mm: f64) -> Disk {
     Disk {
@@ -165,5 +167,59 @@ proptest! {
             apply(im, &mut h.canvas(), Op::Erase);
         }
         prop_assert!(h.is_clear());
+    }
+}
+
+/// Global RAM on a byte slice, as the native simulation and the boards see the map.
+fn bus_map(global: &mut [u8]) -> (Vec<u32>, Vec<u32>) {
+    use vme_map::layout::{CSPACE_MAP, CSPACE_STRIPES};
+    let mut g = vme_map::ArrayBus::new(global);
+    let map = (0..CSPACE_SIDE * CSPACE_SIDE)
+        .map(|i| g.read_u32(CSPACE_MAP + 4 * i))
+        .collect();
+    let stripes = (0..CSPACE_SIDE)
+        .map(|i| g.read_u32(CSPACE_STRIPES + 4 * i))
+        .collect();
+    (map, stripes)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// The map in global RAM (runs of plain words in one bus call, the others byte by byte)
+    /// gets exactly the counters and flags of the map in memory (pixel by pixel), with
+    /// counters started near saturation and at zero, drawing and erasing.
+    #[test]
+    fn runs_on_the_bus_match_pixel_by_pixel_updates(
+        x in -500.0f64..500.0, y in -500.0f64..500.0, r in 0.0f64..50.0,
+        seed in any::<u64>(), erase_first in any::<bool>(),
+    ) {
+        use vme_map::layout::{CSPACE_MAP, CSPACE_STRIPES};
+        let Ok(im) = images(&disk(x, y, r)) else { return Ok(()); };
+        // The same scattered start: zeros, small counts, bytes at 127..255.
+        let mut mem = Memory::default();
+        let mut global = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
+        let mut s = seed | 1;
+        for (i, w) in mem.map.iter_mut().enumerate() {
+            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+            *w = match s % 8 {
+                0 => (s >> 8) as u32 | 0x7F7F_7F7F,
+                1 => 0x0101_0101,
+                2 => 0x00FE_0001,
+                _ => 0,
+            };
+            vme_map::ArrayBus::new(&mut global).write_u32(CSPACE_MAP + 4 * i as u32, *w);
+        }
+        for (i, w) in mem.stripes.iter().enumerate() {
+            vme_map::ArrayBus::new(&mut global).write_u32(CSPACE_STRIPES + 4 * i as u32, *w);
+        }
+        let ops = if erase_first { [Op::Erase, Op::Draw] } else { [Op::Draw, Op::Erase] };
+        for op in ops {
+            let a = apply(&im, &mut mem.canvas(), op);
+            let b = apply(&im, &mut BusCanvas(&mut vme_map::ArrayBus::new(&mut global)), op);
+            prop_assert_eq!(a, b);
+            let (map, stripes) = bus_map(&mut global);
+            prop_assert!(map == mem.map.to_vec(), "maps differ after {:?}", op);
+            prop_assert!(stripes == mem.stripes.to_vec());
+        }
     }
 }

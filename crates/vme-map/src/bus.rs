@@ -35,6 +35,31 @@ pub trait GlobalBus {
         }
         acc
     }
+    /// Updates `n` C-space counter words from `off`, `stride` bytes apart: adds `mask` to
+    /// each (`down`: subtracts it) while that is a plain word add
+    /// ([`crate::layout::counter_fast`]) and stops before the first word that needs the
+    /// byte-by-byte update, leaving it as it was. Returns how many words it updated. A run
+    /// of a C-space image's column in one call (the C-space board's inner loop; on the 68020
+    /// an `ADD.L` / `SUB.L` loop in the runtime's assembly).
+    fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
+        let mut a = off;
+        let mut i = 0;
+        while i < n {
+            let w = self.read_u32(a);
+            if !crate::layout::counter_fast(w, mask, down) {
+                break;
+            }
+            let v = if down {
+                w.wrapping_sub(mask)
+            } else {
+                w.wrapping_add(mask)
+            };
+            self.write_u32(a, v);
+            a += stride;
+            i += 1;
+        }
+        i
+    }
     /// Bit `k` set when the `k`-th of the 32 consecutive aligned words from `off` is
     /// nonzero: 32 pixels of a C-space map row as one word of the planner's bitmap (on the
     /// 68020 a `TST.L (An)+` loop in the runtime's assembly).
@@ -73,6 +98,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         (**self).nonzero_bits(off)
+    }
+    fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
+        (**self).count_words(off, n, stride, mask, down)
     }
 }
 
@@ -214,6 +242,17 @@ impl GlobalBus for MmioGlobal {
         // SAFETY: 32 aligned words of mapped global RAM, only read.
         unsafe { __vme_nonzero_bits(Self::ptr::<u32>(off)) }
     }
+    #[inline(always)]
+    fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
+        extern "C" {
+            // `ADD.L` / `SUB.L` loops in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_count_words(addr: *mut u32, n: u32, stride: u32, mask: u32, down: u32) -> u32;
+        }
+        // SAFETY: `n` aligned words of mapped global RAM `stride` bytes apart (the caller's
+        // offsets come from `layout`), each read and written back by this board alone (its
+        // work-list claim).
+        unsafe { __vme_count_words(Self::ptr::<u32>(off), n, stride, mask, down as u32) }
+    }
 }
 
 #[cfg(test)]
@@ -273,5 +312,53 @@ mod tests {
             assert_eq!(ArrayBus::new(&mut mem).nonzero_bits(off), want);
             assert_eq!(Plain(ArrayBus::new(&mut copy)).nonzero_bits(off), want);
         }
+    }
+
+    #[test]
+    fn count_words_updates_the_plain_words_and_stops_before_the_first_other() {
+        use crate::layout::counter_fast;
+        // Words 512 bytes apart (a map column): plain ones, then one with a byte at 128.
+        let mut mem = [0u8; 8192];
+        let words = [
+            0x0101_0101u32,
+            0x0203_0405,
+            0x7F00_0001,
+            0x0080_0000,
+            0x0101_0101,
+        ];
+        for (k, w) in words.iter().enumerate() {
+            ArrayBus::new(&mut mem).write_u32(512 * k as u32, *w);
+        }
+        let all = 0x0101_0101;
+        let up = ArrayBus::new(&mut mem).count_words(0, 5, 512, all, false);
+        assert_eq!(up, 3, "stops at the word with a high bit set");
+        let mut bus = ArrayBus::new(&mut mem);
+        assert_eq!(bus.read_u32(0), 0x0202_0202);
+        assert_eq!(
+            bus.read_u32(1024),
+            0x8001_0102,
+            "a byte may reach 128 by the add"
+        );
+        assert_eq!(
+            bus.read_u32(1536),
+            0x0080_0000,
+            "the stopping word is untouched"
+        );
+        // Down: the word with a zero byte under the mask stops it; the others go down.
+        bus.write_u32(1024, 0x0100_0101);
+        let down = bus.count_words(0, 5, 512, all, true);
+        assert_eq!(down, 2);
+        assert_eq!(bus.read_u32(512), 0x0203_0405, "up and down again");
+        assert!(!counter_fast(0x0100_0101, all, true));
+        assert!(counter_fast(0x0100_0101, 0x0100_0001, true));
+        // The trait's default loop does the same.
+        let mut copy = [0u8; 8192];
+        for (k, w) in words.iter().enumerate() {
+            ArrayBus::new(&mut copy).write_u32(512 * k as u32, *w);
+        }
+        assert_eq!(
+            Plain(ArrayBus::new(&mut copy)).count_words(0, 5, 512, all, false),
+            3
+        );
     }
 }

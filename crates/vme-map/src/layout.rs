@@ -174,6 +174,20 @@ pub const CSPACE_COUNTERS: u32 = 4;
 /// Bytes of the C-space map.
 pub const CSPACE_MAP_BYTES: u32 = CSPACE_SIDE * CSPACE_SIDE * CSPACE_COUNTERS;
 
+/// The high bit of every counter byte of a C-space map word.
+pub const COUNTER_HIGH: u32 = 0x8080_8080;
+
+/// Whether adding `mask` to the counter word `w` (`down`: subtracting it) is one plain
+/// 32-bit add or subtract, `mask` selecting counters by their bytes' low bits: every byte
+/// below 128 (none saturated or near it) and, going down, every selected byte at least 1,
+/// so no carry or borrow crosses a byte. Otherwise the word needs the byte-by-byte update
+/// of `crates/cspace` (module `counters`).
+#[inline(always)]
+pub const fn counter_fast(w: u32, mask: u32, down: bool) -> bool {
+    w & COUNTER_HIGH == 0
+        && (!down || ((w | COUNTER_HIGH).wrapping_sub(mask)) & COUNTER_HIGH == COUNTER_HIGH)
+}
+
 /// Offset of the counter `dir` (0..4) of pixel (`i1`, `i2`), `i1` along theta1.
 pub const fn cspace_counter(i1: u32, i2: u32, dir: u32) -> u32 {
     CSPACE_MAP + ((i2 % CSPACE_SIDE) * CSPACE_SIDE + (i1 % CSPACE_SIDE)) * CSPACE_COUNTERS + dir
