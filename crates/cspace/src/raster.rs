@@ -361,24 +361,21 @@ fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
     let upper_from = (k.upper_from as i32).min(lo);
     let lower_to = (k.lower_rows as i32).max(hi).min(rows) & keep | (rows & full as i32);
     let both = k.lower_mask | k.upper_mask | k.ends;
-    let first = k.first as u32;
-    let mut piece = |a: i32, b: i32, mask: u32| {
-        if b > a {
-            f.merge(canvas.run(
-                k.col,
-                first.wrapping_add(a as u32),
-                (b - a) as u32,
-                mask,
-                op,
-            ));
-        }
-    };
-    piece(0, upper_from, k.lower_mask | k.ends);
-    piece(upper_from, lo, both);
-    piece(lo, hi, ALL);
-    piece(hi, lower_to, both);
-    piece(lower_to, rows, k.upper_mask | k.ends);
+    piece(canvas, k, 0, upper_from, k.lower_mask | k.ends, op, &mut f);
+    piece(canvas, k, upper_from, lo, both, op, &mut f);
+    piece(canvas, k, lo, hi, ALL, op, &mut f);
+    piece(canvas, k, hi, lower_to, both, op, &mut f);
+    piece(canvas, k, lower_to, rows, k.upper_mask | k.ends, op, &mut f);
     f
+}
+
+/// Rows `a..b` of column `k` with the counters `mask`, if any.
+#[inline(always)]
+fn piece<C: Canvas>(canvas: &mut C, k: &Column, a: i32, b: i32, mask: u32, op: Op, f: &mut Flags) {
+    if b > a {
+        let first = (k.first as u32).wrapping_add(a as u32);
+        f.merge(canvas.run(k.col, first, (b - a) as u32, mask, op));
+    }
 }
 
 /// Draws or erases a link-2 image on the map. (Not inlined: its callers hold the image on
