@@ -168,6 +168,8 @@ pub struct Planner {
     wand_um: [i32; 2],
     /// The goal's two poses (wrapped), valid when `has_goal`.
     poses: [[i32; 2]; 2],
+    /// Their cells ([`cell_of`], kept: asked for every cycle).
+    pose_cells: [[i32; 2]; 2],
     has_goal: bool,
     /// Which pose is the goal.
     pose: usize,
@@ -261,6 +263,7 @@ impl Planner {
             mode_since_us: 0,
             wand_um: [0; 2],
             poses: [[0; 2]; 2],
+            pose_cells: [[0; 2]; 2],
             has_goal: false,
             pose: 0,
             base_pose: 0,
@@ -452,12 +455,11 @@ impl Planner {
         // PROGRESS_US and set off round the other approaches, elbow flip and all.)
         // Nor at either of the goal's poses on any image of the torus (an arm at the goal
         // never sets off round an approach).
-        let at = |p: [i32; 2]| {
-            let c = cell_of(p);
+        let at = |c: [i32; 2]| {
             let w = |i: usize| masks::abs(((arm[i] - c[i] + 64) & 127) - 64);
             masks::lt(1, w(0)) | masks::lt(1, w(1))
         };
-        let away = masks::lt(2, d) & at(self.poses[0]) & at(self.poses[1]);
+        let away = masks::lt(2, d) & at(self.pose_cells[0]) & at(self.pose_cells[1]);
         (settled & (stalled | no_progress | held_long) & away & 1) as u32
     }
 
@@ -469,6 +471,7 @@ impl Planner {
         self.wand_um = w;
         let poses = goal::inverse(w[0], w[1]);
         self.poses = poses;
+        self.pose_cells = [cell_of(poses[0]), cell_of(poses[1])];
         self.has_goal = true;
         self.base_pose = self.pick_pose(&poses, theta);
         self.pose = self.base_pose;
@@ -566,8 +569,9 @@ impl Planner {
             return;
         }
         let poses = self.poses;
-        let r0 = self.fill.reached(cell_of(poses[0]));
-        let r1 = self.fill.reached(cell_of(poses[1]));
+        let cells = self.pose_cells;
+        let r0 = self.fill.reached(cells[0]);
+        let r1 = self.fill.reached(cells[1]);
         if r0 == 1 || r1 == 1 {
             self.unreachable_fills = 0;
             // Go for a pose the fill reached, clear of blocked cells if one is.
@@ -595,7 +599,7 @@ impl Planner {
             if let Mode::Unreachable(_) = self.mode {
                 return;
             }
-            let inside = self.grid.marked(cell_of(poses[0])) & self.grid.marked(cell_of(poses[1]));
+            let inside = self.grid.marked(cells[0]) & self.grid.marked(cells[1]);
             let why = if inside != 0 {
                 reason::GOAL_IN_OBSTACLE
             } else {
