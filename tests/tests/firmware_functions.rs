@@ -368,3 +368,32 @@ fn count_words_matches_the_host_bus() {
         assert!(g == host, "case {case}: global RAM differs");
     }
 }
+
+/// The runtime's unsigned remainder (`__fx_rem_u32`: the 64-bit dividend form of DIVU.L)
+/// against the host's `%`, including a zero divisor.
+#[test]
+fn the_unsigned_remainder_matches_the_host() {
+    let (mut b, img, mut g) = board_of(BoardId::Cspace0);
+    let f = img
+        .symbol("__fx_rem_u32")
+        .expect("__fx_rem_u32 in the cspace image");
+    let mut rng = sim_host::sim::Rng::new(5);
+    let mut cases: Vec<(u32, u32)> = vec![
+        (0, 1),
+        (7, 6),
+        (u32::MAX, 6),
+        (u32::MAX, u32::MAX),
+        (5, 0),
+        (123, 1),
+    ];
+    for _ in 0..2000 {
+        let a = rng.next_u64() as u32 >> (rng.next_u64() % 32);
+        let d = (rng.next_u64() as u32 >> (rng.next_u64() % 32)).max(1);
+        cases.push((a, d));
+    }
+    for (a, d) in cases {
+        let (got, _) = b.call(&mut g, f, &[a, d], 1_000).unwrap();
+        assert_eq!(got, fx::rem_u32(a, d), "{a} % {d}");
+        assert_eq!(got, a.checked_rem(d).unwrap_or(0));
+    }
+}

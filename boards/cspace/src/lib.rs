@@ -11,6 +11,7 @@
 #![deny(missing_docs)]
 
 use board_shell::Shell;
+use cspace::worklist::OBJECT_WORDS;
 use cspace::worklist::{self, Outcome};
 use regs::IoBus;
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
@@ -22,6 +23,9 @@ pub struct Board {
     fault: Option<FaultCode>,
     /// Passes in a row that found the object table torn.
     torn: u8,
+    /// The object table's words as last read (one copy loop instead of a call a word; only
+    /// the job's beacon is decoded).
+    objects_w: [u32; OBJECT_WORDS],
 }
 
 /// Passes in a row the object table may read torn before that is a fault. A skipped pass
@@ -53,6 +57,7 @@ impl Board {
             },
             fault: None,
             torn: 0,
+            objects_w: [0; OBJECT_WORDS],
         }
     }
 
@@ -77,9 +82,9 @@ impl Board {
     pub fn poll<G: GlobalBus>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
         let me = 1 + (self.id().index() - BoardId::Cspace0.index());
-        let (fault, at) = match vme_map::OBJECTS.read(g) {
-            Ok((objects, _)) => {
-                let out = worklist::step(g, me, &objects);
+        let (fault, at) = match vme_map::OBJECTS.read_raw(g, &mut self.objects_w) {
+            Ok(_) => {
+                let out = worklist::step_words(g, me, &self.objects_w);
                 self.last = out;
                 let at = vme_map::layout::work_entry(out.entry);
                 if out.flags.saturated || out.flags.underflow {

@@ -161,11 +161,16 @@ pub struct Outcome {
     pub error: Option<Error>,
 }
 
-/// The beacon of entry `i`. (A function of its own: inlined into `step`, the 68k build read
-/// beacon 0 for every entry; found by the image-against-host system test.)
+/// Words of the object table in global RAM (frame, then four per beacon).
+pub const OBJECT_WORDS: usize = ObjectTable::WORDS as usize;
+
+/// The beacon of entry `i`, decoded from the object table's words: a job needs one beacon,
+/// not all eight. (A function of its own: inlined into `step`, the 68k build read beacon 0
+/// for every entry; found by the image-against-host system test.)
 #[inline(never)]
-fn beacon_of(objects: &ObjectTable, i: u32) -> Beacon {
-    objects.beacons[OBSTACLE_BEACONS[i as usize] as usize]
+fn beacon_of(words: &[u32; OBJECT_WORDS], i: u32) -> Beacon {
+    let base = 1 + OBSTACLE_BEACONS[i as usize] as usize * Beacon::WORDS as usize;
+    Beacon::decode(&mut |k| words[base + k as usize])
 }
 
 /// Work-list entry `i` as it is in global RAM.
@@ -178,6 +183,18 @@ pub fn entry(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
 /// `objects` just read: takes the next entry from the shared cursor and brings its image up
 /// to date.
 pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) -> Outcome {
+    let mut words = [0u32; OBJECT_WORDS];
+    objects.encode(&mut |k, v| words[k as usize] = v);
+    step_words(g, me, &words)
+}
+
+/// [`step`] with the object table as its words in global RAM (what a board reads under the
+/// table's sequence lock): only the job's beacon is decoded.
+pub fn step_words<B: GlobalBus + ?Sized>(
+    g: &mut B,
+    me: u32,
+    objects: &[u32; OBJECT_WORDS],
+) -> Outcome {
     let i = next_entry(g);
     let claim = work_entry(i);
     if g.cas_u32(claim, 0, me) != 0 {
@@ -207,7 +224,7 @@ fn next_entry<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
     loop {
         let found = g.cas_u32(WORK_CURSOR, c, c.wrapping_add(1));
         if found == c {
-            return c % OBSTACLE_BEACONS.len() as u32;
+            return fx::rem_u32(c, OBSTACLE_BEACONS.len() as u32);
         }
         c = found;
     }

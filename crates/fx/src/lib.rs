@@ -50,6 +50,24 @@ pub fn div_shl(num: i32, den: i32, sh: u32) -> i32 {
     }
 }
 
+/// `a % b` for `b` > 0 (0 for `b` = 0): one `DIVUL.L` on the 68020 (`__fx_rem_u32` in the
+/// runtime's assembly) where the compiler calls a software division of some 600 cycles.
+#[inline]
+pub fn rem_u32(a: u32, b: u32) -> u32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __fx_rem_u32(a: u32, b: u32) -> u32;
+        }
+        // SAFETY: a pure function in the runtime's assembly, linked into every image.
+        unsafe { __fx_rem_u32(a, b) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        a.checked_rem(b).unwrap_or(0)
+    }
+}
+
 /// The host implementation of [`div_shl`] (the reference the image's assembly is tested
 /// against).
 pub fn host_div_shl(num: i32, den: i32, sh: u32) -> i32 {

@@ -293,6 +293,42 @@ __vme_nonzero_bits:
     bne.s   1b
     rts
 
+/* ---- unsigned remainder (crates/fx::rem_u32) ----
+ * u32 __fx_rem_u32(u32 a, u32 b): a % b, 0 for b = 0. The 64-bit dividend form of DIVU.L
+ * with a zero high word (the 32-bit form with a remainder register is mis-assembled,
+ * llvm/llvm-project#224186, docs/toolchain.md class 5); the remainder lands in the high
+ * word's register. */
+    .section .text.__fx_rem_u32, "ax"
+    .globl __fx_rem_u32
+__fx_rem_u32:
+    move.l  %d2, -(%sp)         /* arguments now at 8, 12 */
+    move.l  8(%sp), %d0
+    move.l  12(%sp), %d1
+    moveq   #0, %d2
+    tst.l   %d1
+    beq.s   1f
+    divu.l  %d1, %d2:%d0        /* d2:d0 / d1: d0 = quotient, d2 = remainder */
+1:  move.l  %d2, %d0
+    move.l  (%sp)+, %d2
+    rts
+
+/* ---- record reads: a record's words under its sequence lock (vme-map's
+ * GlobalBus::read_words) ----
+ * void __vme_read_words(const u32 *src, u32 *dst, u32 n): copies n words in order, each
+ * read once. */
+    .section .text.__vme_read_words, "ax"
+    .globl __vme_read_words
+__vme_read_words:
+    movea.l 4(%sp), %a0
+    movea.l 8(%sp), %a1
+    move.l  12(%sp), %d0
+    tst.l   %d0
+    beq.s   2f
+1:  move.l  (%a0)+, (%a1)+
+    subq.l  #1, %d0
+    bne.s   1b
+2:  rts
+
 /* ---- C-space counter runs: a column of an image drawn or erased (vme-map's
  * GlobalBus::count_words, crates/cspace's raster) ----
  * u32 __vme_count_words(u32 *addr, u32 n, u32 stride, u32 mask, u32 down): for each of n

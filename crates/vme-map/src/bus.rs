@@ -35,6 +35,16 @@ pub trait GlobalBus {
         }
         acc
     }
+    /// Reads `out.len()` consecutive aligned words from `off` into `out`, in order: a
+    /// record's words under its sequence lock in one call (on the 68020 a `MOVE.L (A0)+,
+    /// (A1)+` loop in the runtime's assembly).
+    fn read_words(&mut self, off: u32, out: &mut [u32]) {
+        let mut a = off;
+        for w in out.iter_mut() {
+            *w = self.read_u32(a);
+            a += 4;
+        }
+    }
     /// Updates `n` C-space counter words from `off`, `stride` bytes apart: adds `mask` to
     /// each (`down`: subtracts it) while that is a plain word add
     /// ([`crate::layout::counter_fast`]) and stops before the first word that needs the
@@ -101,6 +111,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
         (**self).count_words(off, n, stride, mask, down)
+    }
+    fn read_words(&mut self, off: u32, out: &mut [u32]) {
+        (**self).read_words(off, out)
     }
 }
 
@@ -252,6 +265,16 @@ impl GlobalBus for MmioGlobal {
         // offsets come from `layout`), each read and written back by this board alone (its
         // work-list claim).
         unsafe { __vme_count_words(Self::ptr::<u32>(off), n, stride, mask, down as u32) }
+    }
+    #[inline(always)]
+    fn read_words(&mut self, off: u32, out: &mut [u32]) {
+        extern "C" {
+            // A `MOVE.L (A0)+, (A1)+` loop in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_read_words(src: *const u32, dst: *mut u32, n: u32);
+        }
+        // SAFETY: `out.len()` aligned words of mapped global RAM from `off` (offsets come
+        // from `layout`), copied into `out`, which the routine writes only within.
+        unsafe { __vme_read_words(Self::ptr::<u32>(off), out.as_mut_ptr(), out.len() as u32) }
     }
 }
 

@@ -199,9 +199,10 @@ impl<R: Record> SeqLock<R> {
     }
 
     /// Reads the record's `N` (= `R::WORDS`) words into `out` under the lock, as
-    /// [`Self::read`] does, without decoding: generic over the bus, so on the 68020 each
-    /// word is one inlined volatile read instead of two dynamic calls (the reflex reads the
-    /// 33-word object table every pass). Returns the sequence number.
+    /// [`Self::read`] does, without decoding: generic over the bus, so on the 68020 the
+    /// words come in one copy loop ([`GlobalBus::read_words`]) instead of two dynamic calls
+    /// each (the reflex reads the 33-word object table every pass). Returns the sequence
+    /// number.
     #[inline(never)]
     pub fn read_raw<G: GlobalBus + ?Sized, const N: usize>(
         &self,
@@ -213,11 +214,7 @@ impl<R: Record> SeqLock<R> {
         let mut tries = 0;
         while tries < Self::RETRIES {
             let s1 = bus.read_u32(self.off);
-            let mut i = 0;
-            while i < N {
-                out[i] = bus.read_u32(base + 4 * i as u32);
-                i += 1;
-            }
+            bus.read_words(base, out);
             let s2 = bus.read_u32(self.off);
             // Whole when the sequence was even and did not change: one test on a mask.
             if ((s1 ^ s2) | (s1 & 1)) == 0 {
