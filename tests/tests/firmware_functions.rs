@@ -397,3 +397,29 @@ fn the_unsigned_remainder_matches_the_host() {
         assert_eq!(got, a.checked_rem(d).unwrap_or(0));
     }
 }
+
+/// The record reader (`__vme_read_words`, the runtime's assembly) copies exactly the words
+/// asked for, in order, and nothing past them.
+#[test]
+fn read_words_copies_the_words_asked_for() {
+    let (mut b, img, mut g) = board_of(BoardId::Planner);
+    let f = img
+        .symbol("__vme_read_words")
+        .expect("__vme_read_words in the planner image");
+    let off = 0x2000u32;
+    for k in 0..64u32 {
+        ArrayBus::new(&mut g).write_u32(off + 4 * k, 0x1000_0000 + k * 0x0101);
+    }
+    for n in [0u32, 1, 10, 33] {
+        b.ram[BUF as usize..BUF as usize + 256].fill(0xEE);
+        b.call(&mut g, f, &[vme_map::GLOBAL_RAM_BASE + off, BUF, n], 10_000)
+            .unwrap();
+        for k in 0..n as usize {
+            let at = BUF as usize + 4 * k;
+            let w = u32::from_be_bytes(b.ram[at..at + 4].try_into().unwrap());
+            assert_eq!(w, 0x1000_0000 + k as u32 * 0x0101, "word {k} of {n}");
+        }
+        let past = BUF as usize + 4 * n as usize;
+        assert_eq!(&b.ram[past..past + 4], &[0xEE; 4], "nothing past {n} words");
+    }
+}
