@@ -62,22 +62,32 @@ fn the_planner_campaign_reaches_the_solvable_goals_and_reports_the_rest() {
 
 /// What a figure's run did: reflex flags or-ed, planner modes seen, goal reached, contacts.
 fn run_figure(file: &str) -> (u32, u32, bool, u64) {
+    let (f, m, reached, hits, _) = run_figure_walls(file);
+    (f, m, reached, hits)
+}
+
+/// [`run_figure`] and the wall-following episodes the planner began.
+fn run_figure_walls(file: &str) -> (u32, u32, bool, u64, u32) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../sim-host/scenarios")
         .join(file);
     let sc = sim_host::scenario::Scenario::load(&path).unwrap();
     let (wx, wy) = sc.config.wand.at(sc.config.duration_s).unwrap();
     let mut sim = sim_host::sim::Sim::new(sc.config);
-    let (mut flags, mut modes) = (0, 0);
+    let (mut flags, mut modes, mut walls, mut was_wall) = (0, 0, 0, false);
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(20) {
             flags |= vme_map::REFLEX_SUBGOAL
                 .read(&mut sim.bus())
                 .map_or(0, |r| r.0.flags);
-            modes |= vme_map::PLANNER_GOAL
+            let mode = vme_map::PLANNER_GOAL
                 .read(&mut sim.bus())
-                .map_or(0, |r| 1 << (r.0.mode & 0x1F));
+                .map_or(0, |r| r.0.mode & 0x1F);
+            modes |= 1 << mode;
+            let wall = mode == planner_mode::WALL;
+            walls += (wall && !was_wall) as u32;
+            was_wall = wall;
         }
     }
     let [a, b] = sim.plant.angles_rad();
@@ -87,7 +97,26 @@ fn run_figure(file: &str) -> (u32, u32, bool, u64) {
         modes,
         (x - wx).hypot(y - wy) < 0.01,
         sim.collisions.events,
+        walls,
     )
+}
+
+/// Fig. VI.2: with the thesis's leave rule (a clear straight line of sight releases the arm)
+/// the released arm's real path runs back into the wall it left, and the planner loops
+/// there for the whole run; with ours (the servo's real path must be clear) the same scene
+/// is one wall-following episode to the goal.
+#[test]
+fn line_of_sight_loops_in_fig_vi_2_and_the_real_trajectory_does_not() {
+    let (_, _, reached, hits, walls) = run_figure_walls("fig_vi_2_loop.toml");
+    assert!(!reached, "the thesis's rule reached the goal");
+    assert_eq!(hits, 0);
+    assert!(walls >= 10, "{walls} wall-following episodes: no loop");
+    let (_, _, reached, hits, walls) = run_figure_walls("fig_vi_2_trajectory.toml");
+    assert!(
+        reached && hits == 0,
+        "ours: reached {reached}, {hits} contacts"
+    );
+    assert!(walls <= 2, "{walls} wall-following episodes");
 }
 
 /// Figs. VI.3-VI.5: free motion with neither layer stepping in; the reflexes diverting the

@@ -136,7 +136,10 @@ pub enum Leave {
     /// non-converging stall only nearer the goal than the hit point.
     Trajectory,
     /// The thesis's as built: when the straight line of sight to the goal is clear, from
-    /// anywhere (loops in fig. VI.2's scene; kept to show it).
+    /// anywhere; the bug turns one way round every wall (right, reversed only on the next
+    /// approach after cycling round to its hit point), without scouts. Loops where the
+    /// released arm's real path returns to the wall (fig. VI.2, `fig_vi_2_loop.toml`); kept
+    /// to show it.
     LineOfSight,
 }
 
@@ -656,12 +659,20 @@ impl Planner {
         self.hit_d2 = d2(c, goal);
         self.last_hit_d2 = self.hit_d2;
         self.wall_dir = w;
-        // Scout both ways round before the arm commits (module docs).
+        // Scout both ways round before the arm commits (module docs). The thesis's planner
+        // as built turns one way, right (positive rotation about the wall), and reverses
+        // only on an approach after cycling round to its hit point.
         self.scout_left = Tracer::new(c, w, 1, c, goal);
         self.scout_right = Tracer::new(c, w, 3, c, goal);
         self.scout_result = [0; 2];
-        self.scouting = true;
-        self.tracer = Tracer::new(c, w, 1, c, goal);
+        let thesis = self.cfg.leave == Leave::LineOfSight;
+        self.scouting = !thesis;
+        let side = if thesis {
+            3 - 2 * (self.approach & 1)
+        } else {
+            1
+        };
+        self.tracer = Tracer::new(c, w, side, c, goal);
         self.sight.stop();
         self.set_mode(Mode::Wall);
     }
