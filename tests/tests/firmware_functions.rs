@@ -423,3 +423,78 @@ fn read_words_copies_the_words_asked_for() {
         assert_eq!(&b.ram[past..past + 4], &[0xEE; 4], "nothing past {n} words");
     }
 }
+
+/// The C-space board's column routine (`__vme_count_column`, the runtime's assembly) against
+/// the host bus's loop: random columns with bytes near 0 and 128 scattered in, five random
+/// runs from a random row (wrapping past the map's last row), a random number of pixels
+/// passed over, drawing and erasing: the index it stops at and global RAM.
+#[test]
+fn count_column_matches_the_host_bus() {
+    use vme_map::layout::{cspace_counter, CSPACE_MAP};
+    let (mut b, img, mut g) = board_of(BoardId::Cspace0);
+    let f = img
+        .symbol("__vme_count_column")
+        .expect("__vme_count_column in the cspace image");
+    let mut rng = sim_host::sim::Rng::new(23);
+    let pieces_at = 0x000C_0100u32; // board RAM for the five (rows, mask) pairs
+    for case in 0..400u32 {
+        let i1 = (rng.next_u64() % 128) as u32;
+        for r in 0..128 {
+            let v = match rng.next_u64() % 24 {
+                0 => 0x0080_0000,
+                1 => 0x7F7F_7F7F,
+                2 => 0x0100_0001,
+                3 => 0,
+                _ => 0x0101_0101 * (1 + (rng.next_u64() % 60) as u32),
+            };
+            ArrayBus::new(&mut g).write_u32(cspace_counter(i1, r, 0), v);
+        }
+        let masks = [
+            0x0101_0101u32,
+            0x0100_0001,
+            0x0001_0100,
+            0x0000_0001,
+            0x0101_0001,
+        ];
+        let mut pieces = [0u32; 10];
+        let mut left = 1 + (rng.next_u64() % 128) as u32;
+        for p in 0..5 {
+            let n = if p == 4 {
+                left
+            } else {
+                (rng.next_u64() % (left as u64 + 1)) as u32
+            };
+            pieces[2 * p] = n;
+            pieces[2 * p + 1] = masks[(rng.next_u64() % 5) as usize];
+            left -= n;
+        }
+        let total: u32 = (0..5).map(|p| pieces[2 * p]).sum();
+        let row = (rng.next_u64() % 128) as u32;
+        let skip = (rng.next_u64() % (total as u64 + 1)) as u32 * (case % 2);
+        let down = case % 3 == 0;
+        for (k, w) in pieces.iter().enumerate() {
+            let a = pieces_at as usize + 4 * k;
+            b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+        }
+        let col = cspace_counter(i1, 0, 0);
+        assert_eq!(col, CSPACE_MAP + 4 * i1);
+        let mut host = g.clone();
+        let want = ArrayBus::new(&mut host).count_column(col, row, &pieces, skip, down);
+        let (got, _) = b
+            .call(
+                &mut g,
+                f,
+                &[
+                    vme_map::GLOBAL_RAM_BASE + col,
+                    row,
+                    pieces_at,
+                    skip,
+                    down as u32,
+                ],
+                200_000,
+            )
+            .unwrap();
+        assert_eq!(got, want, "case {case}: where it stopped");
+        assert!(g == host, "case {case}: global RAM differs");
+    }
+}

@@ -30,6 +30,19 @@ pub trait Canvas {
     fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags;
     /// Applies `op` to the counters `mask` of stripe-layer column `i1` in `0..128`.
     fn stripe(&mut self, i1: u32, mask: u32, op: Op) -> Flags;
+    /// Applies `op` down column `i1` from row `i2` (wrapping modulo 128) as the five runs
+    /// of `pieces`, (rows, counters) pairs in order: a whole column of an image.
+    fn column(&mut self, i1: u32, i2: u32, pieces: &[u32; 10], op: Op) -> Flags {
+        let mut f = Flags::default();
+        let mut row = i2;
+        let mut p = 0;
+        while p < 5 {
+            f.merge(self.run(i1, row & WRAP, pieces[2 * p], pieces[2 * p + 1], op));
+            row = row.wrapping_add(pieces[2 * p]);
+            p += 1;
+        }
+        f
+    }
     /// Applies `op` to the counters `mask` of the `rows` pixels of column `i1` from row
     /// `i2` up, rows wrapping modulo 128 (`rows` at most 128): a run of an image's column.
     fn run(&mut self, i1: u32, i2: u32, rows: u32, mask: u32, op: Op) -> Flags {
@@ -92,6 +105,25 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
         self.0.write_u32(a, v);
         f
     }
+    /// The whole column in one [`GlobalBus::count_column`] call (the runtime's assembly on
+    /// the 68020); a pixel it stops at takes the byte-by-byte update and the column goes on
+    /// after it.
+    #[inline(never)]
+    fn column(&mut self, i1: u32, i2: u32, pieces: &[u32; 10], op: Op) -> Flags {
+        let mut f = Flags::default();
+        let down = op == Op::Erase;
+        let total = pieces[0] + pieces[2] + pieces[4] + pieces[6] + pieces[8];
+        let col = cspace_counter(i1, 0, 0);
+        let mut done = 0;
+        loop {
+            done = self.0.count_column(col, i2 & WRAP, pieces, done, down);
+            if done >= total {
+                return f;
+            }
+            f.merge(self.pixel(i1, i2.wrapping_add(done) & WRAP, mask_at(pieces, done), op));
+            done += 1;
+        }
+    }
     /// The plain words of the run in one [`GlobalBus::count_words`] call (an assembly loop
     /// on the 68020), at most two pieces where the rows wrap; a word it stops at takes the
     /// byte-by-byte update and the run goes on after it.
@@ -117,6 +149,18 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
         }
         f
     }
+}
+
+/// The counters of pixel `k` of a column given as `pieces` (see [`Canvas::column`]).
+#[inline(never)]
+fn mask_at(pieces: &[u32; 10], k: u32) -> u32 {
+    let mut left = k;
+    let mut p = 0;
+    while p < 4 && left >= pieces[2 * p] {
+        left -= pieces[2 * p];
+        p += 1;
+    }
+    pieces[2 * p + 1]
 }
 
 /// Bytes from a map pixel to the one a row above it.
@@ -339,16 +383,16 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize, edge: &mut Edge) -
     }
 }
 
-/// Updates the pixels of one column as at most five runs of rows with one set of counters
-/// each: the rows the lower chain crosses (with those the upper chain crosses too, where the
-/// two overlap), the interior with all four, the rows the upper chain crosses. Every row
-/// gets its edge counters plus the image's end counters, or all four inside; a full column
-/// is all interior. The bounds are taken without branches on compares (sign arithmetic:
-/// every count is below 2^8): the selects the compiler made of the plain form clobbered the
+/// Updates the pixels of one column as five runs of rows (some empty) with one set of
+/// counters each, in one [`Canvas::column`] call: the rows only the lower chain crosses, the
+/// rows both chains cross (below the interior), the interior with all four counters, the
+/// rows both cross (above it), the rows only the upper chain crosses. Every row gets its
+/// edge counters plus the image's end counters, or all four inside; a full column is all
+/// interior. The bounds are taken without branches on compares (sign arithmetic: every
+/// count is below 2^8): the selects the compiler made of the plain form clobbered the
 /// condition codes on the 68k (docs/toolchain.md).
 #[inline(never)]
 fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
-    let mut f = Flags::default();
     let rows = k.rows as i32;
     // All ones when the whole column is taken (every counter of every row).
     let full = ((CSPACE_SIDE as i32 - 1 - rows) >> 31) as u32;
@@ -361,21 +405,20 @@ fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
     let upper_from = (k.upper_from as i32).min(lo);
     let lower_to = (k.lower_rows as i32).max(hi).min(rows) & keep | (rows & full as i32);
     let both = k.lower_mask | k.upper_mask | k.ends;
-    piece(canvas, k, 0, upper_from, k.lower_mask | k.ends, op, &mut f);
-    piece(canvas, k, upper_from, lo, both, op, &mut f);
-    piece(canvas, k, lo, hi, ALL, op, &mut f);
-    piece(canvas, k, hi, lower_to, both, op, &mut f);
-    piece(canvas, k, lower_to, rows, k.upper_mask | k.ends, op, &mut f);
-    f
-}
-
-/// Rows `a..b` of column `k` with the counters `mask`, if any.
-#[inline(always)]
-fn piece<C: Canvas>(canvas: &mut C, k: &Column, a: i32, b: i32, mask: u32, op: Op, f: &mut Flags) {
-    if b > a {
-        let first = (k.first as u32).wrapping_add(a as u32);
-        f.merge(canvas.run(k.col, first, (b - a) as u32, mask, op));
-    }
+    // The five runs' lengths (every bound is within 0..=rows and they increase).
+    let pieces = [
+        upper_from as u32,
+        k.lower_mask | k.ends,
+        (lo - upper_from) as u32,
+        both,
+        (hi - lo) as u32,
+        ALL,
+        (lower_to - hi) as u32,
+        both,
+        (rows - lower_to) as u32,
+        k.upper_mask | k.ends,
+    ];
+    canvas.column(k.col, k.first as u32, &pieces, op)
 }
 
 /// Draws or erases a link-2 image on the map. (Not inlined: its callers hold the image on

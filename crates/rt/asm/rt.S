@@ -329,6 +329,102 @@ __vme_read_words:
     bne.s   1b
 2:  rts
 
+/* ---- C-space column: an image's column as up to five runs (vme-map's
+ * GlobalBus::count_column, crates/cspace's raster) ----
+ * u32 __vme_count_column(u32 *col, u32 row, const u32 *pieces, u32 skip, u32 down):
+ * col points at the column's pixel in map row 0; pieces holds five (rows, mask) pairs taken
+ * in order down the column from map row `row` (0..127), rows 512 bytes apart, wrapping from
+ * row 127 to row 0. The first `skip` pixels are passed over; each other pixel is updated as
+ * __vme_count_words does (add mask, or subtract it when down, while no byte can carry or
+ * borrow). Stops before the first pixel that needs the byte-by-byte update; returns its
+ * index from the column's first pixel (skip included), or the column's pixel count.
+ * Bit-identical to the trait's default loop. */
+    .section .text.__vme_count_column, "ax"
+    .globl __vme_count_column
+__vme_count_column:
+    movem.l %d2-%d7/%a2-%a4, -(%sp) /* 9 registers: arguments at 40, 44, 48, 52, 56 */
+    movea.l 40(%sp), %a2        /* column, map row 0 */
+    move.l  44(%sp), %d7        /* row of the next pixel */
+    movea.l 48(%sp), %a3        /* pieces */
+    move.l  52(%sp), %d6        /* pixels still to pass over */
+    movea.l 56(%sp), %a1        /* down */
+    lea     40(%a3), %a4        /* end of the pieces */
+    moveq   #0, %d0             /* index of the next pixel */
+    move.l  #0x80808080, %d3
+    moveq   #0, %d1             /* rows left of the current piece */
+1:  cmpa.l  %a4, %a3            /* next piece */
+    beq.w   9f
+    move.l  (%a3)+, %d1
+    move.l  (%a3)+, %d2
+    tst.l   %d6
+    beq.s   3f
+    cmp.l   %d6, %d1
+    bhi.s   2f
+    add.l   %d1, %d0            /* the whole piece passed over */
+    add.l   %d1, %d7
+    sub.l   %d1, %d6
+    moveq   #127, %d4
+    and.l   %d4, %d7
+    bra.s   1b
+2:  add.l   %d6, %d0            /* part of it */
+    add.l   %d6, %d7
+    sub.l   %d6, %d1
+    moveq   #0, %d6
+    moveq   #127, %d4
+    and.l   %d4, %d7
+3:  tst.l   %d1                 /* a segment: rows up to the map's top edge */
+    beq.s   1b
+    move.l  #128, %d4
+    sub.l   %d7, %d4
+    cmp.l   %d1, %d4
+    bls.s   4f
+    move.l  %d1, %d4            /* d4 = rows in this segment */
+4:  move.l  %d7, %d5
+    lsl.l   #8, %d5
+    add.l   %d5, %d5            /* row * 512 */
+    movea.l %a2, %a0
+    adda.l  %d5, %a0
+    sub.l   %d4, %d1
+    add.l   %d4, %d7
+    moveq   #127, %d5
+    and.l   %d5, %d7
+    move.l  %a1, %d5
+    tst.l   %d5
+    bne.s   6f
+5:  move.l  (%a0), %d5          /* up */
+    move.l  %d5, %d6
+    and.l   %d3, %d6
+    bne.s   9f
+    add.l   %d2, %d5
+    move.l  %d5, (%a0)
+    lea     512(%a0), %a0
+    addq.l  #1, %d0
+    subq.l  #1, %d4
+    bne.s   5b
+    moveq   #0, %d6
+    bra.s   3b
+6:  move.l  (%a0), %d5          /* down */
+    move.l  %d5, %d6
+    and.l   %d3, %d6
+    bne.s   8f
+    move.l  %d5, %d6
+    or.l    %d3, %d6
+    sub.l   %d2, %d6
+    and.l   %d3, %d6
+    cmp.l   %d3, %d6
+    bne.s   8f
+    sub.l   %d2, %d5
+    move.l  %d5, (%a0)
+    lea     512(%a0), %a0
+    addq.l  #1, %d0
+    subq.l  #1, %d4
+    bne.s   6b
+    moveq   #0, %d6
+    bra.s   3b
+8:
+9:  movem.l (%sp)+, %d2-%d7/%a2-%a4
+    rts
+
 /* ---- C-space counter runs: a column of an image drawn or erased (vme-map's
  * GlobalBus::count_words, crates/cspace's raster) ----
  * u32 __vme_count_words(u32 *addr, u32 n, u32 stride, u32 mask, u32 down): for each of n

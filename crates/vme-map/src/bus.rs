@@ -35,6 +35,49 @@ pub trait GlobalBus {
         }
         acc
     }
+    /// A column of the C-space map as up to five runs: `pieces` holds five (rows, mask)
+    /// pairs taken in order down the column whose pixel in map row 0 is at `col_off`, from
+    /// map row `row` (0..128), wrapping from the last row to the first. The first `skip`
+    /// pixels are passed over; each other is updated as [`GlobalBus::count_words`] does,
+    /// stopping before the first that needs the byte-by-byte update. Returns that pixel's
+    /// index from the column's first (skip included), or the column's pixel count: a whole
+    /// column of an image in one call (on the 68020 the runtime's assembly).
+    fn count_column(
+        &mut self,
+        col_off: u32,
+        row: u32,
+        pieces: &[u32; 10],
+        skip: u32,
+        down: bool,
+    ) -> u32 {
+        use crate::layout::{counter_fast, CSPACE_COUNTERS, CSPACE_SIDE};
+        let mut k = 0;
+        let mut p = 0;
+        while p < 5 {
+            let (n, mask) = (pieces[2 * p], pieces[2 * p + 1]);
+            let mut i = 0;
+            while i < n {
+                if k >= skip {
+                    let r = row.wrapping_add(k) % CSPACE_SIDE;
+                    let off = col_off + r * CSPACE_SIDE * CSPACE_COUNTERS;
+                    let w = self.read_u32(off);
+                    if !counter_fast(w, mask, down) {
+                        return k;
+                    }
+                    let v = if down {
+                        w.wrapping_sub(mask)
+                    } else {
+                        w.wrapping_add(mask)
+                    };
+                    self.write_u32(off, v);
+                }
+                k += 1;
+                i += 1;
+            }
+            p += 1;
+        }
+        k
+    }
     /// Reads `out.len()` consecutive aligned words from `off` into `out`, in order: a
     /// record's words under its sequence lock in one call (on the 68020 a `MOVE.L (A0)+,
     /// (A1)+` loop in the runtime's assembly).
@@ -114,6 +157,16 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn read_words(&mut self, off: u32, out: &mut [u32]) {
         (**self).read_words(off, out)
+    }
+    fn count_column(
+        &mut self,
+        col_off: u32,
+        row: u32,
+        pieces: &[u32; 10],
+        skip: u32,
+        down: bool,
+    ) -> u32 {
+        (**self).count_column(col_off, row, pieces, skip, down)
     }
 }
 
@@ -265,6 +318,38 @@ impl GlobalBus for MmioGlobal {
         // offsets come from `layout`), each read and written back by this board alone (its
         // work-list claim).
         unsafe { __vme_count_words(Self::ptr::<u32>(off), n, stride, mask, down as u32) }
+    }
+    #[inline(always)]
+    fn count_column(
+        &mut self,
+        col_off: u32,
+        row: u32,
+        pieces: &[u32; 10],
+        skip: u32,
+        down: bool,
+    ) -> u32 {
+        extern "C" {
+            // Runs of `ADD.L` / `SUB.L` loops in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_count_column(
+                col: *mut u32,
+                row: u32,
+                pieces: *const u32,
+                skip: u32,
+                down: u32,
+            ) -> u32;
+        }
+        // SAFETY: the column's 128 aligned words of mapped global RAM from `col_off` (from
+        // `layout`), read and written back by this board alone (its work-list claim);
+        // `pieces` is read only.
+        unsafe {
+            __vme_count_column(
+                Self::ptr::<u32>(col_off),
+                row,
+                pieces.as_ptr(),
+                skip,
+                down as u32,
+            )
+        }
     }
     #[inline(always)]
     fn read_words(&mut self, off: u32, out: &mut [u32]) {
