@@ -5,6 +5,8 @@
 //! that would pass [`SATURATED`] stays there for good ("sticky": it is never decremented
 //! again, so an over-drawn pixel can only stay occupied) and the update reports it.
 
+use vme_map::layout::{counter_fast, counter_plain};
+
 /// Counter byte of the +theta1 edge normal (most significant byte).
 pub const P1: u32 = 0x0100_0000;
 /// Counter byte of the -theta1 edge normal.
@@ -35,16 +37,14 @@ impl Flags {
     }
 }
 
-const HIGH: u32 = 0x8080_8080;
-
 /// Adds one to each counter of `word` selected by `mask` (a sum of [`P1`], [`M1`], [`P2`],
 /// [`M2`]). (Always inlined: called, its struct return went through the 68k backend's
 /// broken convention that pops a stack word the caller never pushed, overwriting the
 /// caller's last local; docs/toolchain.md.)
 #[inline(always)]
 pub fn increment(word: u32, mask: u32) -> (u32, Flags) {
-    if word & HIGH == 0 {
-        return (word + mask, Flags::default());
+    if counter_fast(word, mask, false) {
+        return (counter_plain(word, mask, false), Flags::default());
     }
     slow(word, mask, true)
 }
@@ -54,8 +54,8 @@ pub fn increment(word: u32, mask: u32) -> (u32, Flags) {
 #[inline(always)]
 pub fn decrement(word: u32, mask: u32) -> (u32, Flags) {
     // Every byte below 128 and every selected byte at least 1: no borrow crosses a byte.
-    if word & HIGH == 0 && ((word | HIGH) - mask) & HIGH == HIGH {
-        return (word - mask, Flags::default());
+    if counter_fast(word, mask, true) {
+        return (counter_plain(word, mask, true), Flags::default());
     }
     slow(word, mask, false)
 }

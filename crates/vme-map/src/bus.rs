@@ -64,12 +64,7 @@ pub trait GlobalBus {
                     if !counter_fast(w, mask, down) {
                         return k;
                     }
-                    let v = if down {
-                        w.wrapping_sub(mask)
-                    } else {
-                        w.wrapping_add(mask)
-                    };
-                    self.write_u32(off, v);
+                    self.write_u32(off, crate::layout::counter_plain(w, mask, down));
                 }
                 k += 1;
                 i += 1;
@@ -102,12 +97,7 @@ pub trait GlobalBus {
             if !crate::layout::counter_fast(w, mask, down) {
                 break;
             }
-            let v = if down {
-                w.wrapping_sub(mask)
-            } else {
-                w.wrapping_add(mask)
-            };
-            self.write_u32(a, v);
+            self.write_u32(a, crate::layout::counter_plain(w, mask, down));
             a += stride;
             i += 1;
         }

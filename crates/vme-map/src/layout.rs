@@ -188,6 +188,17 @@ pub const fn counter_fast(w: u32, mask: u32, down: bool) -> bool {
         && (!down || ((w | COUNTER_HIGH).wrapping_sub(mask)) & COUNTER_HIGH == COUNTER_HIGH)
 }
 
+/// Counter word `w` with `mask` added (`down`: subtracted) as one plain word operation: the
+/// update [`counter_fast`] allows.
+#[inline(always)]
+pub const fn counter_plain(w: u32, mask: u32, down: bool) -> u32 {
+    if down {
+        w.wrapping_sub(mask)
+    } else {
+        w.wrapping_add(mask)
+    }
+}
+
 /// Offset of the counter `dir` (0..4) of pixel (`i1`, `i2`), `i1` along theta1.
 pub const fn cspace_counter(i1: u32, i2: u32, dir: u32) -> u32 {
     CSPACE_MAP + ((i2 % CSPACE_SIDE) * CSPACE_SIDE + (i1 % CSPACE_SIDE)) * CSPACE_COUNTERS + dir
