@@ -329,46 +329,6 @@ fn the_servo_image_steps_like_the_host() {
     );
 }
 
-/// The C-space board's run routine (`__vme_count_words`, the runtime's assembly) against the
-/// host bus's loop: columns of words with bytes near 0 and 128 scattered in, drawing and
-/// erasing with every counter mask, the words updated and the count returned.
-#[test]
-fn count_words_matches_the_host_bus() {
-    let (mut b, img, mut g) = board_of(BoardId::Cspace0);
-    let f = img
-        .symbol("__vme_count_words")
-        .expect("__vme_count_words in the cspace image");
-    let mut rng = sim_host::sim::Rng::new(11);
-    let (off, stride) = (0x1_0000u32, 512u32);
-    for case in 0..300u32 {
-        let n = (rng.next_u64() % 130) as u32;
-        for k in 0..130 {
-            let v = match rng.next_u64() % 16 {
-                0 => 0x0080_0000,
-                1 => 0,
-                2 => 0x7F7F_7F7F,
-                3 => 0x0100_0001,
-                _ => 0x0101_0101 * (1 + (rng.next_u64() % 100) as u32),
-            };
-            ArrayBus::new(&mut g).write_u32(off + stride * k, v);
-        }
-        let mask = [0x0101_0101u32, 0x0100_0001, 0x0001_0100, 0x0000_0001][case as usize % 4];
-        let down = case % 3 == 0;
-        let mut host = g.clone();
-        let want = ArrayBus::new(&mut host).count_words(off, n, stride, mask, down);
-        let (got, _) = b
-            .call(
-                &mut g,
-                f,
-                &[vme_map::GLOBAL_RAM_BASE + off, n, stride, mask, down as u32],
-                100_000,
-            )
-            .unwrap();
-        assert_eq!(got, want, "case {case}: words updated");
-        assert!(g == host, "case {case}: global RAM differs");
-    }
-}
-
 /// The runtime's unsigned remainder (`__fx_rem_u32`: the 64-bit dividend form of DIVU.L)
 /// against the host's `%`, including a zero divisor.
 #[test]

@@ -124,31 +124,6 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
             done += 1;
         }
     }
-    /// The plain words of the run in one [`GlobalBus::count_words`] call (an assembly loop
-    /// on the 68020), at most two pieces where the rows wrap; a word it stops at takes the
-    /// byte-by-byte update and the run goes on after it.
-    #[inline(never)]
-    fn run(&mut self, i1: u32, i2: u32, rows: u32, mask: u32, op: Op) -> Flags {
-        let mut f = Flags::default();
-        let down = op == Op::Erase;
-        let mut row = i2 & WRAP;
-        let mut left = rows;
-        while left > 0 {
-            // Rows up to the map's top edge in this piece.
-            let piece = left.min(CSPACE_SIDE - row);
-            let done = self
-                .0
-                .count_words(cspace_counter(i1, row, 0), piece, ROW_BYTES, mask, down);
-            row = (row + done) & WRAP;
-            left -= done;
-            if done < piece {
-                f.merge(self.pixel(i1, row, mask, op));
-                row = (row + 1) & WRAP;
-                left -= 1;
-            }
-        }
-        f
-    }
 }
 
 /// The counters of pixel `k` of a column given as `pieces` (see [`Canvas::column`]).
@@ -162,9 +137,6 @@ fn mask_at(pieces: &[u32; 10], k: u32) -> u32 {
     }
     pieces[2 * p + 1]
 }
-
-/// Bytes from a map pixel to the one a row above it.
-const ROW_BYTES: u32 = CSPACE_SIDE * vme_map::layout::CSPACE_COUNTERS;
 
 /// A whole map and stripe layer in memory, for host-side tools and tests (64.5 KiB; the
 /// boards use [`BusCanvas`] on global RAM instead).

@@ -334,9 +334,10 @@ __vme_read_words:
  * u32 __vme_count_column(u32 *col, u32 row, const u32 *pieces, u32 skip, u32 down):
  * col points at the column's pixel in map row 0; pieces holds five (rows, mask) pairs taken
  * in order down the column from map row `row` (0..127), rows 512 bytes apart, wrapping from
- * row 127 to row 0. The first `skip` pixels are passed over; each other pixel is updated as
- * __vme_count_words does (add mask, or subtract it when down, while no byte can carry or
- * borrow). Stops before the first pixel that needs the byte-by-byte update; returns its
+ * row 127 to row 0. The first `skip` pixels are passed over; each other pixel gets mask
+ * added, or subtracted when down, while no byte can carry or borrow
+ * (vme_map::layout::counter_fast). Stops before the first pixel that needs the
+ * byte-by-byte update; returns its
  * index from the column's first pixel (skip included), or the column's pixel count.
  * Bit-identical to the trait's default loop. */
     .section .text.__vme_count_column, "ax"
@@ -423,57 +424,6 @@ __vme_count_column:
     bra.s   3b
 8:
 9:  movem.l (%sp)+, %d2-%d7/%a2-%a4
-    rts
-
-/* ---- C-space counter runs: a column of an image drawn or erased (vme-map's
- * GlobalBus::count_words, crates/cspace's raster) ----
- * u32 __vme_count_words(u32 *addr, u32 n, u32 stride, u32 mask, u32 down): for each of n
- * words stride bytes apart, while the word has no byte at 128 or more (and, down, no
- * selected byte at 0): add mask (down: subtract it) and store. Stops before the first
- * other word, leaving it; returns the words updated. Bit-identical to the trait's default
- * loop and vme_map::layout::counter_fast. */
-    .section .text.__vme_count_words, "ax"
-    .globl __vme_count_words
-__vme_count_words:
-    movem.l %d2-%d5, -(%sp)     /* arguments now at 20, 24, 28, 32, 36 */
-    movea.l 20(%sp), %a0
-    move.l  24(%sp), %d1        /* words left */
-    move.l  %d1, %d0            /* n */
-    tst.l   %d0
-    beq.s   9f
-    movea.l 28(%sp), %a1        /* stride */
-    move.l  32(%sp), %d2        /* mask */
-    move.l  #0x80808080, %d3
-    tst.l   36(%sp)
-    bne.s   5f
-1:  move.l  (%a0), %d4          /* up */
-    move.l  %d4, %d5
-    and.l   %d3, %d5
-    bne.s   8f
-    add.l   %d2, %d4
-    move.l  %d4, (%a0)
-    adda.l  %a1, %a0
-    subq.l  #1, %d1
-    bne.s   1b
-    bra.s   9f
-5:  move.l  (%a0), %d4          /* down */
-    move.l  %d4, %d5
-    and.l   %d3, %d5
-    bne.s   8f
-    move.l  %d4, %d5
-    or.l    %d3, %d5
-    sub.l   %d2, %d5
-    and.l   %d3, %d5
-    cmp.l   %d3, %d5
-    bne.s   8f
-    sub.l   %d2, %d4
-    move.l  %d4, (%a0)
-    adda.l  %a1, %a0
-    subq.l  #1, %d1
-    bne.s   5b
-    bra.s   9f
-8:  sub.l   %d1, %d0            /* stopped with d1 words left, this one included */
-9:  movem.l (%sp)+, %d2-%d5
     rts
 
 /* ---- fixed-point multiply: the servo's only wide arithmetic (crates/servo::fx) ----

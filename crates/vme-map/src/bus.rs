@@ -38,8 +38,9 @@ pub trait GlobalBus {
     /// A column of the C-space map as up to five runs: `pieces` holds five (rows, mask)
     /// pairs taken in order down the column whose pixel in map row 0 is at `col_off`, from
     /// map row `row` (0..128), wrapping from the last row to the first. The first `skip`
-    /// pixels are passed over; each other is updated as [`GlobalBus::count_words`] does,
-    /// stopping before the first that needs the byte-by-byte update. Returns that pixel's
+    /// pixels are passed over; each other gets `mask` added (`down`: subtracted) while that
+    /// is a plain word add ([`crate::layout::counter_fast`]), stopping before the first that
+    /// needs the byte-by-byte update, which is left as it was. Returns that pixel's
     /// index from the column's first (skip included), or the column's pixel count: a whole
     /// column of an image in one call (on the 68020 the runtime's assembly).
     fn count_column(
@@ -83,26 +84,6 @@ pub trait GlobalBus {
             a += 4;
         }
     }
-    /// Updates `n` C-space counter words from `off`, `stride` bytes apart: adds `mask` to
-    /// each (`down`: subtracts it) while that is a plain word add
-    /// ([`crate::layout::counter_fast`]) and stops before the first word that needs the
-    /// byte-by-byte update, leaving it as it was. Returns how many words it updated. A run
-    /// of a C-space image's column in one call (the C-space board's inner loop; on the 68020
-    /// an `ADD.L` / `SUB.L` loop in the runtime's assembly).
-    fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
-        let mut a = off;
-        let mut i = 0;
-        while i < n {
-            let w = self.read_u32(a);
-            if !crate::layout::counter_fast(w, mask, down) {
-                break;
-            }
-            self.write_u32(a, crate::layout::counter_plain(w, mask, down));
-            a += stride;
-            i += 1;
-        }
-        i
-    }
     /// Bit `k` set when the `k`-th of the 32 consecutive aligned words from `off` is
     /// nonzero: 32 pixels of a C-space map row as one word of the planner's bitmap (on the
     /// 68020 a `TST.L (An)+` loop in the runtime's assembly).
@@ -141,9 +122,6 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         (**self).nonzero_bits(off)
-    }
-    fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
-        (**self).count_words(off, n, stride, mask, down)
     }
     fn read_words(&mut self, off: u32, out: &mut [u32]) {
         (**self).read_words(off, out)
@@ -299,17 +277,6 @@ impl GlobalBus for MmioGlobal {
         unsafe { __vme_nonzero_bits(Self::ptr::<u32>(off)) }
     }
     #[inline(always)]
-    fn count_words(&mut self, off: u32, n: u32, stride: u32, mask: u32, down: bool) -> u32 {
-        extern "C" {
-            // `ADD.L` / `SUB.L` loops in the runtime's assembly (crates/rt/asm/rt.S).
-            fn __vme_count_words(addr: *mut u32, n: u32, stride: u32, mask: u32, down: u32) -> u32;
-        }
-        // SAFETY: `n` aligned words of mapped global RAM `stride` bytes apart (the caller's
-        // offsets come from `layout`), each read and written back by this board alone (its
-        // work-list claim).
-        unsafe { __vme_count_words(Self::ptr::<u32>(off), n, stride, mask, down as u32) }
-    }
-    #[inline(always)]
     fn count_column(
         &mut self,
         col_off: u32,
@@ -413,10 +380,12 @@ mod tests {
     }
 
     #[test]
-    fn count_words_updates_the_plain_words_and_stops_before_the_first_other() {
-        use crate::layout::counter_fast;
-        // Words 512 bytes apart (a map column): plain ones, then one with a byte at 128.
-        let mut mem = [0u8; 8192];
+    fn count_column_updates_the_plain_words_and_stops_before_the_first_other() {
+        use crate::layout::{counter_fast, cspace_counter};
+        let mut mem = [0u8; 0x2_0000];
+        let col = cspace_counter(3, 0, 0);
+        let at = |r: u32| cspace_counter(3, r, 0);
+        // Rows 126, 127, 0, 1, 2 (wrapping): plain words, then one with a byte at 128.
         let words = [
             0x0101_0101u32,
             0x0203_0405,
@@ -424,38 +393,48 @@ mod tests {
             0x0080_0000,
             0x0101_0101,
         ];
-        for (k, w) in words.iter().enumerate() {
-            ArrayBus::new(&mut mem).write_u32(512 * k as u32, *w);
+        let rows = [126u32, 127, 0, 1, 2];
+        for (r, w) in rows.iter().zip(words) {
+            ArrayBus::new(&mut mem).write_u32(at(*r), w);
         }
         let all = 0x0101_0101;
-        let up = ArrayBus::new(&mut mem).count_words(0, 5, 512, all, false);
-        assert_eq!(up, 3, "stops at the word with a high bit set");
+        // Two pieces: two rows with every counter, three with the low one only.
+        let pieces = [2, all, 3, 0x0000_0001, 0, 0, 0, 0, 0, 0];
         let mut bus = ArrayBus::new(&mut mem);
-        assert_eq!(bus.read_u32(0), 0x0202_0202);
         assert_eq!(
-            bus.read_u32(1024),
-            0x8001_0102,
-            "a byte may reach 128 by the add"
+            bus.count_column(col, 126, &pieces, 0, false),
+            3,
+            "stops at row 1"
+        );
+        assert_eq!(bus.read_u32(at(126)), 0x0202_0202);
+        assert_eq!(bus.read_u32(at(127)), 0x0304_0506);
+        assert_eq!(
+            bus.read_u32(at(0)),
+            0x7F00_0002,
+            "past the seam, the second piece's mask"
         );
         assert_eq!(
-            bus.read_u32(1536),
+            bus.read_u32(at(1)),
             0x0080_0000,
             "the stopping word is untouched"
         );
-        // Down: the word with a zero byte under the mask stops it; the others go down.
-        bus.write_u32(1024, 0x0100_0101);
-        let down = bus.count_words(0, 5, 512, all, true);
-        assert_eq!(down, 2);
-        assert_eq!(bus.read_u32(512), 0x0203_0405, "up and down again");
+        assert_eq!(bus.read_u32(at(2)), 0x0101_0101);
+        // Going on after it, as the raster does once it has done that word byte by byte.
+        assert_eq!(bus.count_column(col, 126, &pieces, 4, false), 5);
+        assert_eq!(bus.read_u32(at(2)), 0x0101_0102);
+        assert_eq!(bus.read_u32(at(126)), 0x0202_0202, "passed over");
+        // Down: a selected counter at zero stops it.
+        bus.write_u32(at(127), 0x0100_0101);
+        assert_eq!(bus.count_column(col, 126, &pieces, 0, true), 1);
+        assert_eq!(bus.read_u32(at(126)), 0x0101_0101);
         assert!(!counter_fast(0x0100_0101, all, true));
-        assert!(counter_fast(0x0100_0101, 0x0100_0001, true));
-        // The trait's default loop does the same.
-        let mut copy = [0u8; 8192];
-        for (k, w) in words.iter().enumerate() {
-            ArrayBus::new(&mut copy).write_u32(512 * k as u32, *w);
+        // The trait's own loop on a bus with only the required methods does the same.
+        let mut copy = [0u8; 0x2_0000];
+        for (r, w) in rows.iter().zip(words) {
+            ArrayBus::new(&mut copy).write_u32(at(*r), w);
         }
         assert_eq!(
-            Plain(ArrayBus::new(&mut copy)).count_words(0, 5, 512, all, false),
+            Plain(ArrayBus::new(&mut copy)).count_column(col, 126, &pieces, 0, false),
             3
         );
     }
