@@ -42,7 +42,9 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
-pub mod arrest_log;
+/// The arrest points of the last passes, to hold at the one of the moment an input went
+/// quiet (the servo's log, keyed here by the servo's published time, us).
+pub use servo::arrest_log;
 pub mod goal;
 pub mod health;
 pub mod masks;

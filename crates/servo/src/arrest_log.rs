@@ -1,22 +1,26 @@
-//! The arrest points of the servo's last passes (thesis ch. III and V: the arrest point is
-//! where the arm stops under full braking from where it is now).
+//! The arrest points of the last passes (thesis ch. III and V: the arrest point is where the
+//! arm stops under full braking from where it is now), for a hold at the arrest point of the
+//! moment an input went quiet rather than of the moment its silence was noticed.
 //!
-//! When the reflex dies, the servo notices only when its subgoal has not changed for
-//! [`crate::STALE_S`] (or stayed torn), and meanwhile it drives on toward the last subgoal. To
-//! stop within the arrest distance it published *when the subgoals stopped*, it holds at the
-//! arrest point of that moment, looked up here by the time since the last fresh subgoal.
+//! The servo: when the reflex dies, the servo notices only when its subgoal has not changed
+//! for [`crate::STALE_S`] (or stayed torn), and meanwhile it drives on toward the last
+//! subgoal; it holds at the arrest point of the last fresh subgoal, its own clock (the sum of
+//! its pass periods, Q24 s) as the time. The reflex (`reflex`, thesis ch. V section 2): a
+//! board that dies goes quiet, and the reflex can tell it from a slow one only after the
+//! input's staleness limit (20-50 ms); it holds at the arrest point of the moment the input
+//! went quiet, the servo's published time (us) as the time. (The arm then comes back along
+//! the way it went; docs/reliability.md.)
 
-/// Passes kept: 128, 43 ms at 3 kHz and 171 ms at the image's 750 Hz, beyond the 20 ms
-/// staleness limit either way.
+/// Passes kept: 128, 43 ms of the servo at 3 kHz and 171 ms at the image's 750 Hz, beyond
+/// the staleness limits (20 ms servo, at most 50 ms reflex) at either board's pass rate.
 pub const PASSES: usize = 128;
 
-/// A ring of (pass period, arrest point) of the last [`PASSES`] passes.
+/// A ring of (time, arrest point) of the last [`PASSES`] passes. Times are in any unit, a
+/// wrapping `u32` clock; ages within the ring must stay below 2^31 of it.
 #[derive(Clone, Copy, Debug)]
 pub struct ArrestLog {
-    /// Pass periods, Q24 s (a 16-bit timer's longest period, 32.8 ms, times [`PASSES`]
-    /// stays far inside 32 bits).
-    dt_q24: [i32; PASSES],
-    arrest_q16: [[i32; 2]; PASSES],
+    t: [u32; PASSES],
+    arrest: [[i32; 2]; PASSES],
     n: u32,
     /// Entries kept, up to [`PASSES`].
     kept: u32,
@@ -32,46 +36,51 @@ impl ArrestLog {
     /// Nothing logged.
     pub const fn new() -> Self {
         Self {
-            dt_q24: [0; PASSES],
-            arrest_q16: [[0; 2]; PASSES],
+            t: [0; PASSES],
+            arrest: [[0; 2]; PASSES],
             n: 0,
             kept: 0,
         }
     }
 
-    /// Logs a pass's arrest point, `dt_q32` (Q32 s) after the previous pass. Not inlined: an
-    /// array indexed through a reference in a function of its own (docs/toolchain.md).
+    /// The time of the newest entry (0 when nothing was logged).
+    pub fn newest_t(&self) -> u32 {
+        self.t[(self.n.wrapping_sub(1) as usize) & (PASSES - 1)]
+    }
+
+    /// Logs a pass's arrest point at time `t`. Not inlined: an array indexed through a
+    /// reference in a function of its own (docs/toolchain.md, class 6).
     #[inline(never)]
-    pub fn push(&mut self, dt_q32: i32, arrest_q16: [i32; 2]) {
+    pub fn push(&mut self, t: u32, arrest: [i32; 2]) {
         let i = (self.n as usize) & (PASSES - 1);
-        self.dt_q24[i] = dt_q32 >> 8;
-        self.arrest_q16[i] = arrest_q16;
+        self.t[i] = t;
+        self.arrest[i] = arrest;
         self.n = self.n.wrapping_add(1);
         // Up to PASSES without a compare (a compare and a branch drew a condition-code
-        // clobber from LLVM's M68k backend here; docs/toolchain.md).
+        // clobber from LLVM's M68k backend; docs/toolchain.md).
         self.kept = self.kept + 1 - (self.kept >> 7);
     }
 
-    /// The arrest point of the newest pass at least `age_q32` (Q32 s) before the newest; the
-    /// oldest kept if none is that old; `fallback` if nothing was logged. A fixed number of
-    /// iterations and sign masks, no data-dependent exit (docs/toolchain.md).
+    /// The arrest point of the newest pass at least `age` before `now`; the oldest kept if
+    /// none is that old; `fallback` if nothing was logged. A fixed number of iterations and
+    /// sign masks, no data-dependent exit (docs/toolchain.md).
     #[inline(never)]
-    pub fn at_age(&self, age_q32: i32, fallback: [i32; 2]) -> [i32; 2] {
+    pub fn at_age(&self, now: u32, age: u32, fallback: [i32; 2]) -> [i32; 2] {
         let kept = self.kept as i32;
-        let age_q24 = age_q32 >> 8;
         let (mut a0, mut a1) = (fallback[0], fallback[1]);
         let mut found = 0i32;
-        let mut cum = 0i32;
         let mut k = 0i32;
         while k < PASSES as i32 {
             let i = (self.n.wrapping_sub(1).wrapping_sub(k as u32) as usize) & (PASSES - 1);
+            // All ones when entry k is kept, and when it is at least `age` old.
             let valid = (k - kept) >> 31;
-            let old_enough = !((cum - age_q24) >> 31);
+            let old_enough = !((now.wrapping_sub(self.t[i]) as i32 - age as i32) >> 31);
+            // The newest old enough, else the oldest kept (each valid entry overwrites until
+            // one old enough is found).
             let take = valid & !found;
-            a0 ^= (a0 ^ self.arrest_q16[i][0]) & take;
-            a1 ^= (a1 ^ self.arrest_q16[i][1]) & take;
+            a0 ^= (a0 ^ self.arrest[i][0]) & take;
+            a1 ^= (a1 ^ self.arrest[i][1]) & take;
             found |= valid & old_enough;
-            cum += self.dt_q24[i];
             k += 1;
         }
         [a0, a1]
@@ -83,17 +92,41 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_arrest_point_of_the_last_fresh_subgoal() {
+    fn the_arrest_point_of_the_moment_an_input_went_quiet() {
         let mut log = ArrestLog::new();
-        assert_eq!(log.at_age(1 << 20, [5, 6]), [5, 6], "nothing logged");
-        let ms = 16_777 << 8; // 1 ms in Q32 s, to the log's Q24
-        for k in 0..300 {
-            log.push(ms, [k, -k]);
+        assert_eq!(log.at_age(1000, 30, [7, 8]), [7, 8], "nothing logged");
+        for k in 0..300u32 {
+            log.push(1000 * k, [k as i32, -(k as i32)]);
         }
-        assert_eq!(log.at_age(0, [0, 0]), [299, -299]);
-        assert_eq!(log.at_age(20 * ms, [0, 0]), [279, -279]);
-        assert_eq!(log.at_age(20 * ms + ms / 2, [0, 0]), [278, -278]);
+        assert_eq!(log.newest_t(), 299_000);
+        // Newest pass at least 30 ms before t = 299 ms: t = 269 ms.
+        assert_eq!(log.at_age(299_000, 30_000, [0, 0]), [269, -269]);
+        assert_eq!(log.at_age(299_000, 0, [0, 0]), [299, -299]);
+        assert_eq!(log.at_age(299_500, 30_000, [0, 0]), [269, -269]);
+        assert_eq!(log.at_age(299_000, 30_500, [0, 0]), [268, -268]);
         // Older than the ring: the oldest kept.
-        assert_eq!(log.at_age(400 * ms, [0, 0]), [172, -172]);
+        assert_eq!(log.at_age(299_000, 500_000, [0, 0]), [172, -172]);
+        // Across the clock's wrap.
+        let mut log = ArrestLog::new();
+        for k in 0..50u32 {
+            log.push((u32::MAX - 20_000).wrapping_add(1000 * k), [k as i32, 0]);
+        }
+        let now = (u32::MAX - 20_000).wrapping_add(49_000);
+        assert_eq!(log.at_age(now, 10_000, [0, 0]), [39, 0]);
+    }
+
+    /// The servo's use: a clock that is the sum of the pass periods, ages from the newest.
+    #[test]
+    fn the_arrest_point_of_the_last_fresh_subgoal_by_pass_periods() {
+        let mut log = ArrestLog::new();
+        let ms = 16_777; // 1 ms in Q24 s
+        for k in 0..300 {
+            log.push(log.newest_t().wrapping_add(ms), [k, -k]);
+        }
+        let now = log.newest_t();
+        assert_eq!(log.at_age(now, 0, [0, 0]), [299, -299]);
+        assert_eq!(log.at_age(now, 20 * ms, [0, 0]), [279, -279]);
+        assert_eq!(log.at_age(now, 20 * ms + ms / 2, [0, 0]), [278, -278]);
+        assert_eq!(log.at_age(now, 400 * ms, [0, 0]), [172, -172]);
     }
 }

@@ -562,7 +562,11 @@ impl Servo {
         ];
 
         // The goal: the subgoal while it is fresh and plausible, else hold at the arrest point.
-        self.log.push(dt_q32, arrest);
+        // The log's clock: the sum of the pass periods, Q24 s.
+        self.log.push(
+            self.log.newest_t().wrapping_add((dt_q32 >> 8) as u32),
+            arrest,
+        );
         let (goal, new_fault) = self.choose_goal(input.subgoal, dt_q32, arrest, first);
 
         let mut out = Output {
@@ -684,7 +688,11 @@ impl Servo {
                     // (No look-up for the others: it costs ~44,000 cycles, which the first
                     // pass, waiting for a first subgoal, would add to the start-up.)
                     self.hold_goal_q16 = Some(match why {
-                        Hold::Stale | Hold::Torn => self.log.at_age(self.since_cycle_q32, arrest),
+                        Hold::Stale | Hold::Torn => self.log.at_age(
+                            self.log.newest_t(),
+                            (self.since_cycle_q32 >> 8) as u32,
+                            arrest,
+                        ),
                         _ => arrest,
                     });
                 }
