@@ -339,3 +339,29 @@ impl FunctionCycles {
         v
     }
 }
+
+/// A symbol's demangled path without its crate hashes and generic arguments, its last two
+/// segments (`Fill::work`).
+pub fn demangle_short(n: &str) -> String {
+    let mut full = format!("{:#}", rustc_demangle::demangle(n));
+    // `<planner::fill::Fill>::work`: the type in brackets is the path, not a generic.
+    if let Some(rest) = full.strip_prefix('<') {
+        if let Some(end) = rest.find(">::") {
+            let ty = rest[..end].split(" as ").next().unwrap_or("").to_string();
+            full = format!("{ty}::{}", &rest[end + 3..]);
+        }
+    }
+    // Drop generic arguments, then keep the last two path segments.
+    let mut plain = String::new();
+    let mut depth = 0;
+    for ch in full.chars() {
+        match ch {
+            '<' => depth += 1,
+            '>' => depth -= 1,
+            _ if depth == 0 => plain.push(ch),
+            _ => {}
+        }
+    }
+    let parts: Vec<&str> = plain.split("::").filter(|p| !p.is_empty()).collect();
+    parts[parts.len().saturating_sub(2)..].join("::")
+}

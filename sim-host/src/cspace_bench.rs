@@ -234,7 +234,7 @@ pub fn report(dir: &Path) -> Result<String, String> {
             "  {:>10} {:5.1}%  {}",
             c,
             100.0 * *c as f64 / worst.cycles as f64,
-            crate::planner_bench::demangle_short(name)
+            crate::boot::demangle_short(name)
         );
     }
     let _ = writeln!(

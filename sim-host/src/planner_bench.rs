@@ -267,7 +267,7 @@ pub fn report(dir: &Path) -> Result<String, String> {
         let names: Vec<String> = r
             .worst
             .iter()
-            .map(|(n, c)| format!("{} {c}", demangle_short(n)))
+            .map(|(n, c)| format!("{} {c}", crate::boot::demangle_short(n)))
             .collect();
         t += &format!("  worst pass: {}\n", names.join(", "));
         if let Some((k, a, b)) = r.mismatch {
@@ -276,30 +276,4 @@ pub fn report(dir: &Path) -> Result<String, String> {
     }
     t += "target: planner cycle >= 1 kHz (thesis 0.5-1 kHz)\n";
     Ok(t)
-}
-
-/// A symbol's demangled path without its crate hashes and generic arguments, its last two
-/// segments (`Fill::work`).
-pub fn demangle_short(n: &str) -> String {
-    let mut full = format!("{:#}", rustc_demangle::demangle(n));
-    // `<planner::fill::Fill>::work`: the type in brackets is the path, not a generic.
-    if let Some(rest) = full.strip_prefix('<') {
-        if let Some(end) = rest.find(">::") {
-            let ty = rest[..end].split(" as ").next().unwrap_or("").to_string();
-            full = format!("{ty}::{}", &rest[end + 3..]);
-        }
-    }
-    // Drop generic arguments, then keep the last two path segments.
-    let mut plain = String::new();
-    let mut depth = 0;
-    for ch in full.chars() {
-        match ch {
-            '<' => depth += 1,
-            '>' => depth -= 1,
-            _ if depth == 0 => plain.push(ch),
-            _ => {}
-        }
-    }
-    let parts: Vec<&str> = plain.split("::").filter(|p| !p.is_empty()).collect();
-    parts[parts.len().saturating_sub(2)..].join("::")
 }
