@@ -222,6 +222,9 @@ pub struct Profile {
     pub loops: u64,
     /// (function, cycles spent in it, not counting its callees), most first.
     pub functions: Vec<(String, u64)>,
+    /// (instruction address, cycles spent on it, times executed, its function's short
+    /// name), most cycles first: for reading beside `m68k-linux-gnu-objdump -d` of the image.
+    pub addresses: Vec<(u32, u64, u64, String)>,
 }
 
 /// Boots `board` alone (the sensing board with eight beacons in view, run 0.6 s first to
@@ -263,10 +266,14 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
     let start = b.cycles;
     let end = start + (ms * CPU_HZ as f64 / 1000.0) as u64;
     let mut next_feed = start + quarter_ms;
+    let mut at: std::collections::HashMap<u32, (u64, u64)> = Default::default();
     while b.cycles < end && b.state == RunState::Running {
         let pc = b.cpu.pc;
         let c = b.step(&mut sys.global);
         per.charge(pc, c);
+        let e = at.entry(pc).or_default();
+        e.0 += c;
+        e.1 += 1;
         if b.cycles >= next_feed {
             next_feed += quarter_ms;
             if let Some(f) = feed.as_mut() {
@@ -281,10 +288,16 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
     let cycles = b.cycles - start;
     let loops = sys.heartbeat(board).wrapping_sub(hb0) as u64;
     let functions = per.top();
+    let mut addresses: Vec<(u32, u64, u64, String)> = at
+        .into_iter()
+        .map(|(a, (c, n))| (a, c, n, demangle_short(per.name_of(a))))
+        .collect();
+    addresses.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     Ok(Profile {
         cycles,
         loops,
         functions,
+        addresses,
     })
 }
 
@@ -312,6 +325,14 @@ impl FunctionCycles {
     /// Charges `c` cycles to the function holding `pc`.
     pub fn charge(&mut self, pc: u32, c: u64) {
         self.cycles[self.syms.partition_point(|(a, _)| *a <= pc)] += c;
+    }
+
+    /// The name of the function holding `pc` (`?` before the first symbol).
+    pub fn name_of(&self, pc: u32) -> &str {
+        match self.syms.partition_point(|(a, _)| *a <= pc) {
+            0 => "?",
+            i => &self.syms[i - 1].1,
+        }
     }
 
     /// Forgets every charge.

@@ -163,6 +163,10 @@ enum Cmd {
         /// Functions to list.
         #[arg(long, default_value_t = 15)]
         top: usize,
+        /// Also list this many costliest instruction addresses (with their function), to
+        /// read beside `m68k-linux-gnu-objdump -d` of the image.
+        #[arg(long, default_value_t = 0)]
+        addresses: usize,
     },
     /// Build the C-space image database from the arm's outline and check it against the
     /// committed `crates/cspace/src/tables.rs` (or rewrite that file with `--write`).
@@ -421,6 +425,7 @@ fn main() -> ExitCode {
             images,
             ms,
             top,
+            addresses,
         } => {
             let Some(id) = parse_board(&board) else {
                 eprintln!("sim-host: unknown board {board:?} ({BOARD_NAMES})");
@@ -444,6 +449,18 @@ fn main() -> ExitCode {
                             100.0 * *c as f64 / p.cycles as f64,
                             *c as f64 / p.loops.max(1) as f64,
                             rustc_demangle::demangle(name)
+                        );
+                    }
+                    if addresses > 0 {
+                        println!(
+                            "{:>10} {:>10} {:>10} {:>8}  function",
+                            "address", "cycles", "per loop", "times"
+                        );
+                    }
+                    for (a, c, n, f) in p.addresses.iter().take(addresses) {
+                        println!(
+                            "{a:>#10x} {c:>10} {:>10.1} {n:>8}  {f}",
+                            *c as f64 / p.loops.max(1) as f64,
                         );
                     }
                     ExitCode::SUCCESS
