@@ -458,3 +458,101 @@ fn count_column_matches_the_host_bus() {
         assert!(g == host, "case {case}: global RAM differs");
     }
 }
+
+/// The sensing board's filter (`__sense_filter`, the runtime's assembly: push a sample, then
+/// the estimate) against `Filter::push` and `Filter::estimate` on the host: random walks
+/// with jumps (the movement check and the long window's restart), the adaptive filter on
+/// and off, resets, both windows filling and full; the estimate and every byte of the
+/// filter after each sample.
+#[test]
+fn the_sensing_filter_matches_the_host_bit_for_bit() {
+    use sensing::filter::{layout, Estimate, Filter, RECIP_Q16};
+    let (mut b, img, mut g) = board_of(BoardId::Sensing);
+    let f = img
+        .symbol("__sense_filter")
+        .expect("__sense_filter in the sensing image");
+    // The reciprocal table the board passes, in board RAM.
+    let table_at = BUF + 0x1000;
+    for (n, v) in RECIP_Q16.iter().enumerate() {
+        let a = table_at as usize + 4 * n;
+        b.ram[a..a + 4].copy_from_slice(&v.to_be_bytes());
+    }
+    let (fa, ea) = (BUF as usize, BUF as usize + 0x800);
+    let mut host = Filter::new();
+    b.ram[fa..fa + layout::FILTER_BYTES].copy_from_slice(&host.to_be_bytes());
+    let mut rng = sim_host::sim::Rng::new(31);
+    let mut p = [0i32; 2];
+    let mut v = [0i32; 2];
+    let mut adaptive = true;
+    let (mut estimates, mut full_long, mut moves) = (0, 0, 0);
+    for step in 0..30_000u32 {
+        match rng.next_u64() % 3000 {
+            0 => {
+                host.reset();
+                b.ram[fa..fa + layout::FILTER_BYTES].copy_from_slice(&host.to_be_bytes());
+            }
+            1..=3 => p = [(rng.next_u64() % 16000) as i32 - 8000; 2],
+            // Ramps from slow creep (below the movement threshold) to fast.
+            4..=8 => {
+                v = [
+                    (rng.next_u64() % 41) as i32 - 20,
+                    (rng.next_u64() % 9) as i32 - 4,
+                ]
+            }
+            9..=14 => v = [0; 2],
+            15 => adaptive = !adaptive,
+            _ => {}
+        }
+        p = [
+            (p[0] + v[0]).clamp(-8000, 8000),
+            (p[1] + v[1]).clamp(-8000, 8000),
+        ];
+        let noise = |r: &mut sim_host::sim::Rng| (r.next_u64() % 61) as i32 - 30;
+        let q = [p[0] + noise(&mut rng), p[1] + noise(&mut rng)];
+        host.push(q, adaptive);
+        let want = host.estimate(adaptive);
+        b.ram[ea..ea + layout::ESTIMATE_BYTES].fill(0xEE);
+        let (got, _) = b
+            .call(
+                &mut g,
+                f,
+                &[
+                    fa as u32,
+                    q[0] as u32,
+                    q[1] as u32,
+                    adaptive as u32,
+                    ea as u32,
+                    table_at,
+                ],
+                5_000,
+            )
+            .unwrap();
+        let word = |o: usize| i32::from_be_bytes(b.ram[ea + o..ea + o + 4].try_into().unwrap());
+        let got = (got != 0).then(|| Estimate {
+            q5: [word(0), word(4)],
+            samples: u16::from_be_bytes([b.ram[ea + 8], b.ram[ea + 9]]),
+            moving: b.ram[ea + 10] != 0,
+            filling: b.ram[ea + 11] != 0,
+        });
+        if let Some(e) = got {
+            assert!(
+                b.ram[ea + 10] <= 1 && b.ram[ea + 11] <= 1,
+                "bools are 0 or 1"
+            );
+            estimates += 1;
+            full_long += (e.samples == 255) as u32;
+            moves += (e.moving && e.samples == 32) as u32;
+        } else {
+            assert_eq!(b.ram[ea], 0xEE, "step {step}: no estimate leaves out alone");
+        }
+        assert_eq!(got, want, "step {step}: the estimate");
+        assert!(
+            b.ram[fa..fa + layout::FILTER_BYTES] == host.to_be_bytes()[..],
+            "step {step}: the filter's state"
+        );
+    }
+    // The cases were all met: estimates, the long window full, movement.
+    assert!(estimates > 25_000, "{estimates} estimates");
+    assert!(full_long > 2_000, "{full_long} full long windows");
+    assert!(moves > 400, "{moves} moving estimates");
+}

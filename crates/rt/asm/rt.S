@@ -539,3 +539,158 @@ __fx_mul_shr:
     move.l  #0x80000000, %d0
 1:  movem.l (%sp)+, %d2-%d3
     rts
+
+/* ---- the sensing board's position filter (crates/sensing::filter::Filter::push_estimate) ----
+ * u32 __sense_filter(Filter *f, i32 qx, i32 qy, u32 adaptive, Estimate *out,
+ *                    const i32 *recip_q16):
+ * Filter::push of the sample (qx, qy) (Q2 codes) then Filter::estimate, bit-identical to
+ * the host's pair; returns 1 with *out written, or 0 (fewer than MIN_VALID samples, *out
+ * untouched). recip_q16[n] = 2^16 / n. The means since rest that the movement check takes
+ * are the long window's estimate when no movement is found (same sums, same n): computed
+ * once. Field offsets: crates/sensing/src/filter.rs `layout` (asserted there). */
+    .set    F_SHORT, 512            /* Axis::short (x; y is 520 bytes on) */
+    .set    F_SINCE, 516            /* Axis::since */
+    .set    F_Y, 520                /* the second axis */
+    .set    F_NEXT, 1040            /* u8 ring index */
+    .set    F_COUNT, 1042           /* u16 samples held */
+    .set    F_SINCE_N, 1044         /* u16 samples since rest */
+    .set    F_MOVED, 1046           /* u16 samples since the last movement */
+    .section .text.__sense_filter, "ax"
+    .globl __sense_filter
+__sense_filter:
+    movem.l %d2-%d7/%a2, -(%sp)     /* arguments now at 32: f, qx, qy, adaptive, out, recip */
+    movea.l 32(%sp), %a0
+    movea.l 52(%sp), %a1
+    moveq   #0, %d0
+    move.b  F_NEXT(%a0), %d0        /* next */
+    moveq   #0, %d1
+    move.b  %d0, %d1
+    subi.b  #32, %d1                /* (next - SHORT) mod 256 */
+    add.l   %d0, %d0                /* byte offsets into the i16 rings */
+    add.l   %d1, %d1
+    cmpi.w  #32, F_COUNT(%a0)
+    scc     %d2                     /* -1: the short window was full (count >= SHORT) */
+    extb.l  %d2
+    cmpi.w  #256, F_SINCE_N(%a0)
+    scc     %d3                     /* -1: the window since rest was full (since >= LONG) */
+    extb.l  %d3
+    movea.l %a0, %a2                /* axis x, then axis y */
+    move.l  36(%sp), %d4
+    moveq   #1, %d7
+1:  move.w  (%a2,%d1.l), %d5        /* the sample leaving the short window */
+    ext.l   %d5
+    and.l   %d2, %d5
+    move.l  %d4, %d6
+    sub.l   %d5, %d6
+    add.l   %d6, F_SHORT(%a2)
+    move.w  (%a2,%d0.l), %d5        /* the sample leaving the window since rest */
+    ext.l   %d5
+    and.l   %d3, %d5
+    move.l  %d4, %d6
+    sub.l   %d5, %d6
+    add.l   %d6, F_SINCE(%a2)
+    move.w  %d4, (%a2,%d0.l)        /* ring[next] = v as i16 */
+    lea     F_Y(%a2), %a2
+    move.l  40(%sp), %d4
+    dbra    %d7, 1b
+    addq.b  #1, F_NEXT(%a0)         /* next wraps at 256 */
+    cmpi.w  #256, F_COUNT(%a0)
+    bcc.s   2f
+    addq.w  #1, F_COUNT(%a0)
+2:  moveq   #0, %d5
+    move.w  F_SINCE_N(%a0), %d5
+    cmpi.w  #256, %d5
+    bcc.s   3f
+    addq.w  #1, %d5
+    move.w  %d5, F_SINCE_N(%a0)     /* d5 = since, from here on the window's length */
+3:  move.w  F_MOVED(%a0), %d6
+    addq.w  #1, %d6
+    bcc.s   4f
+    subq.w  #1, %d6                 /* saturates at 0xFFFF */
+4:  move.w  %d6, F_MOVED(%a0)
+    tst.l   44(%sp)
+    beq.s   20f                     /* not adaptive: no movement check, the short window */
+    cmpi.w  #32, %d5
+    bls.s   20f                     /* since <= SHORT: the short window */
+    /* movement check: |short mean - mean since rest| > MOVE_Q5 (896) on either axis */
+    move.l  (%a1,%d5.l*4), %d6      /* 2^16 / since */
+    moveq   #10, %d7
+    move.l  F_SINCE(%a0), %d0
+    asr.l   #3, %d0
+    muls.l  %d6, %d0
+    asr.l   %d7, %d0                /* x mean since rest, Q5 */
+    move.l  F_Y+F_SINCE(%a0), %d1
+    asr.l   #3, %d1
+    muls.l  %d6, %d1
+    asr.l   %d7, %d1                /* y */
+    move.l  F_SHORT(%a0), %d2
+    asr.l   #2, %d2
+    sub.l   %d0, %d2
+    bpl.s   5f
+    neg.l   %d2
+5:  cmpi.l  #896, %d2
+    bgt.s   7f
+    move.l  F_Y+F_SHORT(%a0), %d2
+    asr.l   #2, %d2
+    sub.l   %d1, %d2
+    bpl.s   6f
+    neg.l   %d2
+6:  cmpi.l  #896, %d2
+    bgt.s   7f
+    /* at rest: the long window, d0/d1 its means, d5 its length */
+    cmpi.w  #8, F_COUNT(%a0)
+    bcs.w   40f
+    movea.l 48(%sp), %a2
+    bra.s   30f
+7:  move.l  F_SHORT(%a0), F_SINCE(%a0)     /* moved: restart the long window from the short */
+    move.l  F_Y+F_SHORT(%a0), F_Y+F_SINCE(%a0)
+    move.w  #32, F_SINCE_N(%a0)
+    clr.w   F_MOVED(%a0)
+    /* the short window: min(count, SHORT) samples */
+20: moveq   #0, %d4
+    move.w  F_COUNT(%a0), %d4
+    cmpi.w  #8, %d4
+    bcs.s   40f                     /* fewer than MIN_VALID: no estimate */
+    movea.l 48(%sp), %a2
+    moveq   #32, %d5
+    move.l  F_SHORT(%a0), %d0
+    asr.l   #2, %d0
+    move.l  F_Y+F_SHORT(%a0), %d1
+    asr.l   #2, %d1
+    cmp.l   %d5, %d4
+    bcc.s   30f                     /* full: the sum of 32 Q2 samples is the Q5 mean */
+    move.l  %d4, %d5                /* filling: sum x 2^16 / n, shifted down 11 */
+    move.l  (%a1,%d5.l*4), %d6
+    moveq   #11, %d7
+    muls.l  %d6, %d0
+    asr.l   %d7, %d0
+    muls.l  %d6, %d1
+    asr.l   %d7, %d1
+30: move.l  %d0, (%a2)              /* q5 */
+    move.l  %d1, 4(%a2)
+    move.l  %d5, %d6                /* samples: the window, at most 255 */
+    cmpi.l  #255, %d6
+    bls.s   31f
+    move.l  #255, %d6
+31: move.w  %d6, 8(%a2)
+    moveq   #0, %d6                 /* moving: adaptive and moved < SHORT */
+    moveq   #0, %d7                 /* filling: window < (adaptive ? LONG : SHORT) */
+    tst.l   44(%sp)
+    beq.s   32f
+    cmpi.w  #32, F_MOVED(%a0)
+    scs     %d6
+    cmpi.l  #256, %d5
+    scs     %d7
+    bra.s   33f
+32: moveq   #32, %d0
+    cmp.l   %d0, %d5
+    scs     %d7
+33: neg.b   %d6
+    neg.b   %d7
+    move.b  %d6, 10(%a2)
+    move.b  %d7, 11(%a2)
+    moveq   #1, %d0
+    bra.s   41f
+40: moveq   #0, %d0
+41: movem.l (%sp)+, %d2-%d7/%a2
+    rts

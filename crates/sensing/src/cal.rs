@@ -229,7 +229,13 @@ fn corners(t: &mut impl CalWords, base: u32, row: u32, xs: &mut [i32; 4], ys: &m
 /// Index and Q10 fraction of a Q5 signal in the inverse grid (clamped to the grid).
 #[inline(always)]
 fn inv_cell(v_q5: i32) -> (i32, i32) {
-    let u = (v_q5 + Q5_HALF_SPAN).clamp(0, (INV_CELLS << cal::INV_CELL_SHIFT_Q5) - 1);
+    // Clamped by sign masks, not compares (their flags were clobbered on the 68k;
+    // docs/toolchain.md class 1).
+    const TOP: i32 = (INV_CELLS << cal::INV_CELL_SHIFT_Q5) - 1;
+    let u = v_q5 + Q5_HALF_SPAN;
+    let u = u & !(u >> 31);
+    let over = (TOP - u) >> 31;
+    let u = (u & !over) | (TOP & over);
     (
         u >> cal::INV_CELL_SHIFT_Q5,
         (u & ((1 << cal::INV_CELL_SHIFT_Q5) - 1)) >> 1,

@@ -256,8 +256,10 @@ pub struct Sensing {
     lit: Option<u8>,
     converting: Option<Conversion>,
     sampled: Option<Conversion>,
-    /// The last processed sample's raw codes and beacon (for the crosstalk correction).
-    prev: Option<(u8, [i32; 2])>,
+    /// The beacon lit after the last processed sample's (8 before any sample: none is),
+    /// and that sample's raw codes (for the crosstalk correction).
+    prev_next: u8,
+    prev_raw: [i32; 2],
     levels: [u16; BEACONS],
     filters: [Filter; BEACONS],
     config: Config,
@@ -294,7 +296,8 @@ impl Sensing {
             lit: None,
             converting: None,
             sampled: None,
-            prev: None,
+            prev_next: 8,
+            prev_raw: [0; 2],
             levels: [regs::sensing::LED_LEVEL_RESET_MA; BEACONS],
             filters: [Filter::new(); BEACONS],
             config: Config::DEFAULT,
@@ -402,10 +405,14 @@ impl Sensing {
         let b = conv.beacon as usize & 7;
         let raw = [s.x as i32 - 2048, s.y as i32 - 2048];
         let sum = s.sum as i32 - 2048;
-        let prev = self.prev.replace((conv.beacon, raw));
+        let (prev_next, prev_raw) = (self.prev_next, self.prev_raw);
+        self.prev_next = (conv.beacon + 1) & 7;
+        self.prev_raw = raw;
         let mut event = 0;
         let mut flags = 0;
         let cfg = self.config;
+        let mut e = filter::Estimate::default();
+        let mut valid = false;
         if sum < OCCLUDED_BELOW_CODES {
             self.filters[b].reset();
             flags |= bf::OCCLUDED;
@@ -420,26 +427,21 @@ impl Sensing {
             event = Event::Saturated(conv.beacon).code();
         } else {
             let mut q2 = [raw[0] << 2, raw[1] << 2];
-            if let (true, Some((pb, pv))) = (cfg.has(opt::CROSSTALK), prev) {
-                // Only when the previous sample was of the beacon lit just before: a mask,
-                // not a branch (this compare's flags were clobbered on the 68k;
-                // docs/toolchain.md class 1).
-                let d = (((pb + 1) & 7) ^ conv.beacon) as i32;
-                let consecutive = !((d | d.wrapping_neg()) >> 31);
-                crosstalk_q2(&mut q2, &raw, &pv, conv.lit_ticks, consecutive);
-            }
-            self.filters[b].push(q2, cfg.has(opt::ADAPTIVE_FILTER));
+            // Only when on and the previous sample was of the beacon lit just before: masks,
+            // not branches (their compares' flags were clobbered on the 68k;
+            // docs/toolchain.md class 1).
+            let d = (prev_next ^ conv.beacon) as i32;
+            let on = (cfg.has(opt::CROSSTALK) as i32).wrapping_neg();
+            let consecutive = !((d | d.wrapping_neg()) >> 31) & on;
+            crosstalk_q2(&mut q2, &raw, &prev_raw, conv.lit_ticks, consecutive);
+            valid = self.filters[b].push_estimate(q2, cfg.has(opt::ADAPTIVE_FILTER), &mut e);
             self.levels[b] = if cfg.has(opt::CURRENT_FEEDBACK) {
                 feedback_ma(self.levels[b] as i32, sum, cfg.s_ref_codes) as u16
             } else {
                 cfg.level_ma as u16
             };
         }
-        let est = if flags == 0 {
-            self.filters[b].estimate(cfg.has(opt::ADAPTIVE_FILTER))
-        } else {
-            None
-        };
+        let est = valid.then_some(e);
         let rb = &mut self.raw.beacons[b];
         rb.sum_codes = sum;
         rb.level_ma = self.levels[b] as u32;
@@ -495,7 +497,10 @@ impl Sensing {
         event
     }
 
-    /// The tip as the drift reference: learns from it while the arm rests.
+    /// The tip as the drift reference: learns from it while the arm rests. Once a frame, so
+    /// not inlined (inlined into `step`, its saturating adds drew condition-code clobbers;
+    /// docs/toolchain.md class 1).
+    #[inline(never)]
     fn reference(
         &mut self,
         est: Option<filter::Estimate>,
