@@ -165,11 +165,14 @@ pub fn build_table(scan: &Scan) -> Vec<u32> {
                 ((i as f64) * 64.0 - 2048.0) * 32.0,
                 ((j as f64) * 64.0 - 2048.0) * 32.0,
             ];
-            // From the neighbouring node's solution (the map is smooth); a full search
-            // where that does not converge.
+            // From the nearest scanned signal; from the neighbouring node's solution where
+            // that does not converge. (Neighbour-first found, for the thesis firmware's
+            // full scan, a second solution where the linear extrapolations beyond the grid's
+            // edges fold over the scanned area: interior nodes 0.9 m wrong.)
+            let near = invert(scan, c);
             let ([u, v], _) = match prev.map(|p| newton(scan, c, p)) {
-                Some((uv, e)) if e < 1e-3 => (uv, e),
-                _ => invert(scan, c),
+                Some((uv, e)) if near.1 >= 1e-3 && e < near.1 => (uv, e),
+                _ => near,
             };
             prev = Some([u, v]);
             let p = truth_at(scan, u, v);
