@@ -442,6 +442,13 @@ fn main() -> ExitCode {
                         CPU_HZ as f64 / per,
                         CPU_HZ as f64 / 1e6
                     );
+                    if id == BoardId::Sensing {
+                        println!(
+                            "(a sensing loop is a strobe frame of 8 slots: {:.0} cycles a slot, budget {})",
+                            per / 8.0,
+                            CPU_HZ / 4000
+                        );
+                    }
                     println!("{:>10} {:>6} {:>12}  function", "cycles", "%", "per loop");
                     for (name, c) in p.functions.iter().take(top) {
                         println!(

@@ -391,7 +391,7 @@ pub fn image_rate(dir: &std::path::Path) -> Result<(f64, f64), String> {
         crate::boot::System::power_up(dir, &[BoardId::Sensing]).map_err(|e| e.to_string())?;
     sys.boards[0].io = lit_camera(1);
     sys.run_ms(1200.0);
-    // The object table's frame count and the board's heartbeat (one beat a slot).
+    // The object table's frame count and the board's heartbeat (one beat a strobe frame).
     let count = |sys: &mut crate::boot::System| -> Result<(u32, u32), String> {
         let frame = vme_map::OBJECTS
             .read(&mut sys.bus())
@@ -403,7 +403,7 @@ pub fn image_rate(dir: &std::path::Path) -> Result<(f64, f64), String> {
     let (f0, h0) = count(&mut sys)?;
     sys.run_ms(1000.0);
     let (f1, h1) = count(&mut sys)?;
-    let slots = h1.wrapping_sub(h0) as f64;
+    let slots = 8.0 * h1.wrapping_sub(h0) as f64;
     Ok((
         f1.wrapping_sub(f0) as f64,
         crate::emu::CPU_HZ as f64 / slots.max(1.0),
