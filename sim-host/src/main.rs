@@ -445,7 +445,7 @@ fn main() -> ExitCode {
                     if id == BoardId::Sensing {
                         println!(
                             "(a sensing loop is a strobe frame of 8 slots: {:.0} cycles a slot, budget {})",
-                            per / 8.0,
+                            per / board_sensing::SLOTS_PER_BEAT as f64,
                             CPU_HZ / 4000
                         );
                     }

@@ -432,13 +432,20 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
                 Some((a, b, c)) => (Some(a), Some(b), Some(c)),
                 None => (None, None, None),
             };
+            // The sensing image beats once per strobe frame: its loop's budget is a frame.
+            let per_beat = if s.board == BoardId::Sensing && s.loop_us.is_some() {
+                board_sensing::SLOTS_PER_BEAT as f64
+            } else {
+                1.0
+            };
+            let budget_us = s.period_s * 1e6 * per_beat;
             BoardSummary {
                 board: s.board.name().into(),
-                period_us: s.period_s * 1e6,
+                period_us: budget_us,
                 loop_min_us: lo,
                 loop_mean_us: mean,
                 loop_max_us: hi,
-                budget_share: mean.map(|m| m / (s.period_s * 1e6)),
+                budget_share: mean.map(|m| m / budget_us),
                 stack_bytes: s.stack_bytes,
                 polls: s.polls,
                 rate_hz: s.polls as f64 / t,

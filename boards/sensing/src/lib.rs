@@ -20,6 +20,9 @@ use sensing::{AdcSample, Config, Event, Input, Sensing, ServoView};
 use vme_map::records::beacon_index;
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
+/// Strobe slots per heartbeat: the board beats once per strobe frame of eight beacons.
+pub const SLOTS_PER_BEAT: u32 = 8;
+
 /// The calibration table in global RAM (at `vme_map::SENSING_CAL`).
 pub struct GlobalCal<'a, G: GlobalBus>(pub &'a mut G);
 
@@ -189,6 +192,7 @@ impl Board {
         }
         // One beat per strobe frame (2 ms), in the slot that polled the host: a beat every
         // slot cost a tenth of the slot's budget.
+        const _: () = assert!(SLOTS_PER_BEAT as usize == vme_map::records::BEACONS);
         if slot.next == 0 {
             let bad_table = matches!(self.sensing.checker.state, State::Bad(_));
             let state = if self.fault.is_some() || bad_table {

@@ -646,43 +646,22 @@ fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u
     q2[1] += ((raw[1] - prev[1]) * f) >> 14;
 }
 
-/// 2^22 / s for sum levels s = 0..=2047 codes (0 for 0): the feedback's division as a
-/// multiply (the 68020's DIVS.L and its call cost 340 cycles of the 4,175-cycle slot).
-const RECIP_SUM_Q22: [u16; 2048] = recip_sums();
-
-const fn recip_sums() -> [u16; 2048] {
-    let mut t = [0u16; 2048];
-    let mut s = OCCLUDED_BELOW_CODES as usize;
-    while s < 2048 {
-        t[s] = ((1u32 << 22) / s as u32) as u16;
-        s += 1;
-    }
-    t
-}
-
 /// The next drive current: the current that gives the sum level `s_ref` if the sum is
 /// proportional to the current, level x s_ref / sum, clamped to the driver's range. (The
 /// linearised step level x (2 - sum / s_ref) it replaces sent a beacon more than twice too
 /// bright at the reset current, one near the camera axis, to the minimum current, where it
 /// read as occluded and was reset again: found by the reflex campaign, the beacon was never
-/// valid.) Called for lit beacons only: `sum` is taken within [`OCCLUDED_BELOW_CODES`] and
-/// 2047. The quotient goes through [`RECIP_SUM_Q22`] (within 0.05 % and 1 mA of the exact
-/// one): level < 2^10, the reciprocal < 2^15, their product shifted down 6 times s_ref <
-/// 2^11 fits in 32 bits. Not inlined: inlined, it moved a condition-code clobber into
-/// `Sensing::step` (docs/toolchain.md class 1).
+/// valid.) level < 2^10 and s_ref < 2^11: the product fits in 32 bits. (A reciprocal table
+/// in place of the division, within 1 mA of it, saved 90 cycles a slot but moved the fig.
+/// VI.2 scene, whose loop is that sensitive, off its loop.) Not inlined: inlined, it moved a
+/// condition-code clobber into `Sensing::step` (docs/toolchain.md class 1).
 #[inline(never)]
 fn feedback_ma(level: i32, sum: i32, s_ref: i32) -> i32 {
     // Sign masks, not max/clamp: their compares' flags were clobbered on the 68k
     // (docs/toolchain.md class 1). -1 where the condition holds.
     let pick = |m: i32, a: i32, b: i32| b ^ ((a ^ b) & m);
-    let sum = pick(
-        (sum - OCCLUDED_BELOW_CODES) >> 31,
-        OCCLUDED_BELOW_CODES,
-        sum,
-    );
-    let sum = pick((2047 - sum) >> 31, 2047, sum);
-    let r = RECIP_SUM_Q22[sum as usize] as i32;
-    let v = (((level * r) >> 6) * s_ref) >> 16;
+    let sum = pick((sum - 1) >> 31, 1, sum);
+    let v = fx::div(level * s_ref, sum);
     let v = pick((v - LEVEL_MIN_MA) >> 31, LEVEL_MIN_MA, v);
     pick((LEVEL_MAX_MA - v) >> 31, LEVEL_MAX_MA, v)
 }
