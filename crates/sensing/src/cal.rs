@@ -97,7 +97,12 @@ impl Checker {
 
     /// The header of the table in use, if one is.
     pub fn header(&self) -> Option<Header> {
-        match self.state {
+        self.header_ref().copied()
+    }
+
+    /// [`Self::header`] without the copy (the slot's budget: the header is ten words).
+    pub fn header_ref(&self) -> Option<&Header> {
+        match &self.state {
             State::Good(h) => Some(h),
             _ => None,
         }

@@ -435,11 +435,11 @@ impl Sensing {
             let consecutive = !((d | d.wrapping_neg()) >> 31) & on;
             crosstalk_q2(&mut q2, &raw, &prev_raw, conv.lit_ticks, consecutive);
             valid = self.filters[b].push_estimate(q2, cfg.has(opt::ADAPTIVE_FILTER), &mut e);
-            self.levels[b] = if cfg.has(opt::CURRENT_FEEDBACK) {
-                feedback_ma(self.levels[b] as i32, sum, cfg.s_ref_codes) as u16
-            } else {
-                cfg.level_ma as u16
-            };
+            // The feedback's level, or the fixed one when it is off: a mask, not a branch
+            // (its compare's flags were clobbered on the 68k; docs/toolchain.md class 1).
+            let fb = feedback_ma(self.levels[b] as i32, sum, cfg.s_ref_codes);
+            let on = (cfg.has(opt::CURRENT_FEEDBACK) as i32).wrapping_neg();
+            self.levels[b] = ((fb & on) | (cfg.level_ma & !on)) as u16;
         }
         let est = valid.then_some(e);
         let rb = &mut self.raw.beacons[b];
@@ -449,7 +449,7 @@ impl Sensing {
             rb.x_q5 = e.q5[0];
             rb.y_q5 = e.q5[1];
         }
-        let header = self.checker.header();
+        let header = self.checker.header_ref();
         let beacon = &mut self.objects.beacons[b];
         beacon.t_us = conv.t_us;
         match (est, header) {
