@@ -322,17 +322,28 @@ impl FunctionCycles {
         Self { syms, cycles }
     }
 
+    /// Index into `cycles` of the function holding `pc` (0: before the first symbol).
+    fn slot(&self, pc: u32) -> usize {
+        self.syms.partition_point(|(a, _)| *a <= pc)
+    }
+
+    /// The name of slot `i` (`?` before the first symbol).
+    fn name(&self, i: usize) -> &str {
+        match i {
+            0 => "?",
+            i => &self.syms[i - 1].1,
+        }
+    }
+
     /// Charges `c` cycles to the function holding `pc`.
     pub fn charge(&mut self, pc: u32, c: u64) {
-        self.cycles[self.syms.partition_point(|(a, _)| *a <= pc)] += c;
+        let i = self.slot(pc);
+        self.cycles[i] += c;
     }
 
     /// The name of the function holding `pc` (`?` before the first symbol).
     pub fn name_of(&self, pc: u32) -> &str {
-        match self.syms.partition_point(|(a, _)| *a <= pc) {
-            0 => "?",
-            i => &self.syms[i - 1].1,
-        }
+        self.name(self.slot(pc))
     }
 
     /// Forgets every charge.
@@ -347,14 +358,7 @@ impl FunctionCycles {
             .iter()
             .enumerate()
             .filter(|(_, &c)| c > 0)
-            .map(|(i, &c)| {
-                let name = if i == 0 {
-                    "?".to_string()
-                } else {
-                    self.syms[i - 1].1.clone()
-                };
-                (name, c)
-            })
+            .map(|(i, &c)| (self.name(i).to_string(), c))
             .collect();
         v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
         v
