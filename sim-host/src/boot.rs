@@ -213,6 +213,16 @@ pub fn boot(dir: &Path, boards: &[BoardId], run_ms: f64) -> Result<Vec<BootRepor
     Ok(out)
 }
 
+/// Main-loop passes per heartbeat: one for every board but the sensing board, which beats
+/// once per strobe frame of [`board_sensing::SLOTS_PER_BEAT`] slots. Loop periods and rates
+/// measured from heartbeats are per this many passes.
+pub fn passes_per_beat(board: BoardId) -> u32 {
+    match board {
+        BoardId::Sensing => board_sensing::SLOTS_PER_BEAT,
+        _ => 1,
+    }
+}
+
 /// Where one board's CPU time goes: cycles per function of its image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Profile {

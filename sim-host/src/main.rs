@@ -442,10 +442,11 @@ fn main() -> ExitCode {
                         CPU_HZ as f64 / per,
                         CPU_HZ as f64 / 1e6
                     );
-                    if id == BoardId::Sensing {
+                    let per_beat = sim_host::boot::passes_per_beat(id);
+                    if per_beat > 1 {
                         println!(
-                            "(a sensing loop is a strobe frame of 8 slots: {:.0} cycles a slot, budget {})",
-                            per / board_sensing::SLOTS_PER_BEAT as f64,
+                            "(a sensing loop is a strobe frame of {per_beat} slots: {:.0} cycles a slot, budget {})",
+                            per / per_beat as f64,
                             CPU_HZ / 4000
                         );
                     }

@@ -432,13 +432,12 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
                 Some((a, b, c)) => (Some(a), Some(b), Some(c)),
                 None => (None, None, None),
             };
-            // The sensing image beats once per strobe frame: its loop's budget is a frame.
-            let per_beat = if s.board == BoardId::Sensing && s.loop_us.is_some() {
-                board_sensing::SLOTS_PER_BEAT as f64
-            } else {
-                1.0
+            // Image mode measures the loop between heartbeats: its budget is that many passes.
+            let per_beat = match s.loop_us {
+                Some(_) => crate::boot::passes_per_beat(s.board),
+                None => 1,
             };
-            let budget_us = s.period_s * 1e6 * per_beat;
+            let budget_us = s.period_s * 1e6 * per_beat as f64;
             BoardSummary {
                 board: s.board.name().into(),
                 period_us: budget_us,

@@ -403,7 +403,7 @@ pub fn image_rate(dir: &std::path::Path) -> Result<(f64, f64), String> {
     let (f0, h0) = count(&mut sys)?;
     sys.run_ms(1000.0);
     let (f1, h1) = count(&mut sys)?;
-    let slots = board_sensing::SLOTS_PER_BEAT as f64 * h1.wrapping_sub(h0) as f64;
+    let slots = crate::boot::passes_per_beat(BoardId::Sensing) as f64 * h1.wrapping_sub(h0) as f64;
     Ok((
         f1.wrapping_sub(f0) as f64,
         crate::emu::CPU_HZ as f64 / slots.max(1.0),

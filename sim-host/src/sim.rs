@@ -900,11 +900,7 @@ mod tests {
                 .read_u32(vme_map::BoardSlot::of(s.board).heartbeat());
             // One beat a pass; the sensing board's pass is a strobe slot and it beats once a
             // frame of eight.
-            let per_beat = if s.board == BoardId::Sensing {
-                board_sensing::SLOTS_PER_BEAT as u64
-            } else {
-                1
-            };
+            let per_beat = crate::boot::passes_per_beat(s.board) as u64;
             assert_eq!(hb as u64, s.polls / per_beat, "{:?}", s.board);
             let st = vme_map::BoardSlot::of(s.board).status_word(&mut sim.bus());
             assert_eq!(st.state(), Some(BoardState::Running));
