@@ -116,19 +116,21 @@ impl Filter {
     /// The filter as the 68020 holds it in memory (`repr(C)`, big-endian): for the tests
     /// that run `__sense_filter` on the emulated CPU against this code.
     pub fn to_be_bytes(&self) -> [u8; layout::FILTER_BYTES] {
+        use core::mem::{offset_of, size_of};
         let mut b = [0u8; layout::FILTER_BYTES];
+        let mut put = |at: usize, bytes: &[u8]| b[at..at + bytes.len()].copy_from_slice(bytes);
         for (k, a) in self.axes.iter().enumerate() {
-            let o = k * 520;
+            let o = offset_of!(Filter, axes) + k * size_of::<Axis>();
             for (i, v) in a.ring.iter().enumerate() {
-                b[o + 2 * i..o + 2 * i + 2].copy_from_slice(&v.to_be_bytes());
+                put(o + offset_of!(Axis, ring) + 2 * i, &v.to_be_bytes());
             }
-            b[o + 512..o + 516].copy_from_slice(&a.short.to_be_bytes());
-            b[o + 516..o + 520].copy_from_slice(&a.since.to_be_bytes());
+            put(o + offset_of!(Axis, short), &a.short.to_be_bytes());
+            put(o + offset_of!(Axis, since), &a.since.to_be_bytes());
         }
-        b[1040] = self.next;
-        b[1042..1044].copy_from_slice(&self.count.to_be_bytes());
-        b[1044..1046].copy_from_slice(&self.since.to_be_bytes());
-        b[1046..1048].copy_from_slice(&self.moved.to_be_bytes());
+        put(offset_of!(Filter, next), &[self.next]);
+        put(offset_of!(Filter, count), &self.count.to_be_bytes());
+        put(offset_of!(Filter, since), &self.since.to_be_bytes());
+        put(offset_of!(Filter, moved), &self.moved.to_be_bytes());
         b
     }
 
