@@ -170,8 +170,9 @@ pub fn build_table(scan: &Scan) -> Vec<u32> {
             // full scan, a second solution where the linear extrapolations beyond the grid's
             // edges fold over the scanned area: interior nodes 0.9 m wrong.)
             let near = invert(scan, c);
-            let ([u, v], _) = match prev.map(|p| newton(scan, c, p)) {
-                Some((uv, e)) if near.1 >= 1e-3 && e < near.1 => (uv, e),
+            let from_prev = prev.filter(|_| near.1 >= 1e-3).map(|p| newton(scan, c, p));
+            let ([u, v], _) = match from_prev {
+                Some((uv, e)) if e < near.1 => (uv, e),
                 _ => near,
             };
             prev = Some([u, v]);
