@@ -1,5 +1,6 @@
-//! Assembles `asm/rt.S` with GNU as for the 68020 images and links it whole-archive, so the
-//! vector table and reset code are always part of the image.
+//! Assembles `asm/rt.S` and `asm/servo.S` with GNU as for the 68020 images and links them
+//! whole-archive, so the vector table and reset code are always part of the image (the
+//! linker's section garbage collection drops the routines a board does not call).
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -12,22 +13,27 @@ fn run(cmd: &mut Command) {
 }
 
 fn main() {
-    println!("cargo:rerun-if-changed=asm/rt.S");
+    const SOURCES: [&str; 2] = ["rt", "servo"];
+    for s in SOURCES {
+        println!("cargo:rerun-if-changed=asm/{s}.S");
+    }
     if std::env::var("CARGO_CFG_TARGET_ARCH").as_deref() != Ok("m68k") {
         return;
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
-    let obj = out.join("rt.o");
     let lib = out.join("librtasm.a");
-    run(Command::new("m68k-linux-gnu-as")
-        .args(["-m68020", "-o"])
-        .arg(&obj)
-        .arg("asm/rt.S"));
     let _ = std::fs::remove_file(&lib);
-    run(Command::new("m68k-linux-gnu-ar")
-        .arg("crs")
-        .arg(&lib)
-        .arg(&obj));
+    for s in SOURCES {
+        let obj = out.join(format!("{s}.o"));
+        run(Command::new("m68k-linux-gnu-as")
+            .args(["-m68020", "-o"])
+            .arg(&obj)
+            .arg(format!("asm/{s}.S")));
+        run(Command::new("m68k-linux-gnu-ar")
+            .arg("crs")
+            .arg(&lib)
+            .arg(&obj));
+    }
     println!("cargo:rustc-link-search=native={}", out.display());
     println!("cargo:rustc-link-lib=static:+whole-archive=rtasm");
 }

@@ -30,6 +30,28 @@ fn servo_routine(name: &str) -> impl FnMut(&[i32]) -> i32 {
     }
 }
 
+/// Routine `name` (C ABI, 32-bit arguments and result) from the first board image that
+/// links it, called on the emulated CPU.
+fn any_routine(name: &str) -> impl FnMut(&[i32]) -> i32 {
+    let (mut b, f, mut g) = [
+        BoardId::Servo,
+        BoardId::Sensing,
+        BoardId::Reflex,
+        BoardId::Planner,
+        BoardId::Cspace0,
+    ]
+    .into_iter()
+    .find_map(|id| {
+        let (b, img, g) = board_of(id);
+        img.symbol(name).map(|f| (b, f, g))
+    })
+    .unwrap_or_else(|| panic!("{name} in no board image"));
+    move |args| {
+        let args: Vec<u32> = args.iter().map(|&a| a as u32).collect();
+        b.call(&mut g, f, &args, 10_000).unwrap().0 as i32
+    }
+}
+
 /// Scratch area in the board's RAM for test buffers.
 const BUF: u32 = 0x000C_0000;
 
@@ -153,9 +175,11 @@ fn nonzero_bits_matches_the_host_bus() {
     }
 }
 
+/// `__fx_mul_shr` (any shift) and the fixed-shift `__fx_mul_shrN` that `fx::mul_shr` calls
+/// for the shifts the firmware uses most, against the host's.
 #[test]
 fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
-    let mut f = servo_routine("__fx_mul_shr");
+    let mut f = any_routine("__fx_mul_shr");
     let mut rng = sim_host::sim::Rng::new(42);
     let edge = [
         0,
@@ -186,9 +210,23 @@ fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
         let sh = 1 + (rng.next_u64() % 32) as u32;
         cases.push((a, bb, sh));
     }
-    for (a, bb, sh) in cases {
+    for &(a, bb, sh) in &cases {
         let want = servo::fx::host_mul_shr(a, bb, sh);
         assert_eq!(f(&[a, bb, sh as i32]), want, "mul_shr({a}, {bb}, {sh})");
+    }
+    for sh in [8, 16, 17, 24, 28, 32] {
+        let mut f = any_routine(&format!("__fx_mul_shr{sh}"));
+        // The cases, and values just inside and outside the range that fits.
+        let mut pairs: Vec<(i32, i32)> = cases.iter().map(|&(a, b, _)| (a, b)).collect();
+        for k in -3..=3 {
+            let top = (1i64 << (31 + sh)) / 65536 + k;
+            pairs.push(((top.clamp(i32::MIN as i64, i32::MAX as i64)) as i32, 65536));
+            pairs.push(((-top).clamp(i32::MIN as i64, i32::MAX as i64) as i32, 65536));
+        }
+        for (a, bb) in pairs {
+            let want = servo::fx::host_mul_shr(a, bb, sh);
+            assert_eq!(f(&[a, bb]), want, "mul_shr{sh}({a}, {bb})");
+        }
     }
 }
 
@@ -555,4 +593,137 @@ fn the_sensing_filter_matches_the_host_bit_for_bit() {
     assert!(estimates > 25_000, "{estimates} estimates");
     assert!(full_long > 2_000, "{full_long} full long windows");
     assert!(moves > 400, "{moves} moving estimates");
+}
+
+/// The servo image's per-link routines (`__servo_observe`: the observer update and the
+/// arrest point; `__servo_control`: the proximate law, near-goal corrections, notch, DAC
+/// code and inertia estimate; the runtime's assembly) against `LinkState::observe_rust`
+/// and `LinkState::control_rust` on the host, both links, with the 3 kHz and the 750 Hz
+/// constants: a closed loop on a rigid link with random goal jumps, timer jitter (periods
+/// beyond the 10 ms bound too), encoder glitches (the observer's re-lock), the observers
+/// settled or not, and random extreme errors and speeds (saturation on every path). The
+/// results and every byte of the state after each call must be identical.
+#[test]
+fn the_servo_link_routines_match_the_host_bit_for_bit() {
+    use servo::fx::host_mul_shr;
+    use servo::{layout, params, LinkState, Observer, Regime};
+    let (mut b, img, mut g) = board_of(BoardId::Servo);
+    let fo = img
+        .symbol("__servo_observe")
+        .expect("__servo_observe in the image");
+    let fc = img
+        .symbol("__servo_control")
+        .expect("__servo_control in the image");
+    let (ka, oa, sa) = (BUF as usize, BUF as usize + 0x200, BUF as usize + 0x400);
+    let mut rng = sim_host::sim::Rng::new(43);
+    let mut rnd = |n: u64| (rng.next_u64() % n) as i64;
+    let (mut regimes, mut relocks, mut estimates, mut deadband) = ([0u32; 3], 0, 0, 0);
+    for set in [&params::TUNED, &params::TUNED_AT_IMAGE_HZ] {
+        for (li, k) in set.iter().enumerate() {
+            let link = [arm::LINK1, arm::LINK2][li];
+            b.ram[ka..ka + layout::LINK_CONST_BYTES].copy_from_slice(&layout::link_const_be(k));
+            let mut obs = Observer::at(0);
+            let mut st = LinkState::new(k);
+            let rad_per_count = std::f64::consts::TAU / link.counts_per_rev as f64;
+            let (mut theta, mut omega, mut goal) = (0.0f64, 0.0f64, 0i32);
+            for step in 0..12_000 {
+                let ticks: i32 = match rnd(400) {
+                    0 => 30_000 + rnd(35_000) as i32,
+                    1 => 0,
+                    _ => 600 + rnd(2100) as i32,
+                };
+                let dt_q32 = host_mul_shr(ticks, params::TIMER_TICK_Q40, 8);
+                let dt = ticks as f64 / 2e6;
+                // The rigid link under the last torque, with Coulomb friction.
+                let u = st.torque_q16 as f64 / 65536.0;
+                let fr = if omega.abs() > 1e-4 {
+                    link.coulomb_nm * omega.signum()
+                } else if u.abs() <= link.coulomb_nm {
+                    u
+                } else {
+                    link.coulomb_nm * u.signum()
+                };
+                omega += (u - fr) / link.inertia_kgm2 * dt;
+                theta += omega * dt;
+                let c = (theta / rad_per_count).floor() as i32;
+                let mut y = host_mul_shr(2 * c + 1, k.rad_per_count_q32, 17);
+                match rnd(700) {
+                    0 => y = y.wrapping_add(rnd(1 << 24) as i32 - (1 << 23)),
+                    // At the edge of the plausible innovation, either side.
+                    1..=3 => {
+                        let bound =
+                            host_mul_shr(k.omega_limit_q16, dt_q32.min(servo::MAX_DT_Q32), 32)
+                                + servo::MAX_INNOVATION_Q16;
+                        let side = if rnd(2) == 0 { 1 } else { -1 };
+                        y = obs.theta_q16() + side * (bound + rnd(3) as i32 - 1);
+                    }
+                    _ => {}
+                }
+                if rnd(600) == 0 {
+                    goal = rnd(8 << 16) as i32 - (4 << 16);
+                }
+                // Observe.
+                b.ram[oa..oa + 8].copy_from_slice(&layout::observer_be(&obs));
+                let before = obs;
+                let want = st.observe_rust(k, &mut obs, y, dt_q32);
+                relocks += (obs.omega_q16 == 0 && before.omega_q16 != 0) as u32;
+                let args = [
+                    ka as u32,
+                    oa as u32,
+                    y as u32,
+                    st.torque_q16 as u32,
+                    dt_q32 as u32,
+                    st.est.brake_q32 as u32,
+                ];
+                let (got, _) = b.call(&mut g, fo, &args, 20_000).unwrap();
+                assert_eq!(got as i32, want, "link {li} step {step}: the arrest point");
+                assert_eq!(
+                    b.ram[oa..oa + 8],
+                    layout::observer_be(&obs),
+                    "link {li} step {step}: the observer"
+                );
+                // Control: the loop's error and speed, or extremes now and then.
+                let (err, w) = match rnd(50) {
+                    0 => (
+                        (rnd(1 << 32) as u32 as i32) >> rnd(8),
+                        (rnd(1 << 32) as u32 as i32) >> (4 + rnd(8)),
+                    ),
+                    1 => (rnd(200) as i32 - 100, rnd(200) as i32 - 100),
+                    _ => (y - goal, obs.omega_q16),
+                };
+                let settled = rnd(20) != 0;
+                b.ram[sa..sa + layout::LINK_STATE_BYTES]
+                    .copy_from_slice(&layout::link_state_be(&st));
+                let inertia = st.est.inertia_q32;
+                let (code, r) = st.control_rust(k, err, w, dt_q32, settled);
+                let args = [
+                    ka as u32,
+                    sa as u32,
+                    err as u32,
+                    w as u32,
+                    dt_q32 as u32,
+                    settled as u32,
+                ];
+                let (got, _) = b.call(&mut g, fc, &args, 50_000).unwrap();
+                assert_eq!(
+                    (got as u16 as i16, got >> 16),
+                    (code, r as u32),
+                    "link {li} step {step}: code and regime"
+                );
+                assert_eq!(
+                    b.ram[sa..sa + layout::LINK_STATE_BYTES],
+                    layout::link_state_be(&st),
+                    "link {li} step {step}: the link's state"
+                );
+                regimes[r as usize] += 1;
+                estimates += (st.est.inertia_q32 != inertia) as u32;
+                deadband += (r == Regime::Linear && w.abs() < k.moving_q16) as u32;
+            }
+        }
+    }
+    // Every path was taken.
+    assert!(regimes.iter().all(|&n| n > 1000), "regimes {regimes:?}");
+    assert!(relocks > 20, "{relocks} re-locks");
+    assert!(estimates > 20, "{estimates} inertia estimates accepted");
+    assert!(deadband > 1000, "{deadband} passes at rest near the goal");
 }

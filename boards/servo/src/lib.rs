@@ -14,7 +14,8 @@ use board_shell::Shell;
 use regs::servo::{AmpCtrl, ServoIo};
 use regs::IoBus;
 use servo::{q16_to_urad, Hold, Input, Servo, Subgoal};
-use vme_map::records::ServoState;
+use vme_map::record::Record;
+use vme_map::records::{ReflexSubgoal, ServoState};
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
 /// The servo board's state between main-loop passes.
@@ -73,15 +74,19 @@ impl Board {
     }
 
     /// One pass of the main loop: sample, control, drive, publish. Returns the heartbeat.
-    pub fn poll(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) -> u32 {
+    /// Generic over the bus: on the 68020 the global RAM's accesses are then inlined
+    /// volatile moves, not dynamic calls.
+    pub fn poll<G: GlobalBus + ?Sized>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
         let mut hw = ServoIo::new(&mut *io);
         let enc = hw.latch_encoders();
         let timer = hw.timer();
-        let subgoal = match vme_map::REFLEX_SUBGOAL.read(g) {
+        let mut w = [0u32; <ReflexSubgoal as Record>::WORDS as usize];
+        let subgoal = match vme_map::REFLEX_SUBGOAL.read_raw(g, &mut w) {
             // Sequence 0: the reflex has never published.
-            Ok((_, 0)) => None,
-            Ok((r, _)) => {
+            Ok(0) => None,
+            Ok(_) => {
+                let r = ReflexSubgoal::from_words(&w);
                 self.torn = 0;
                 self.last_sub = Some(Subgoal {
                     goal_urad: [r.goal1_urad, r.goal2_urad],
@@ -125,16 +130,18 @@ impl Board {
             t_us: (self.ticks >> 1) as u32,
             loops: self.loops,
         };
-        vme_map::SERVO_STATE.publish(g, &state);
+        vme_map::SERVO_STATE.publish_raw(g, &state.to_words());
         if let Some(why) = out.new_fault {
             let code = match why {
                 Hold::Stale | Hold::NoSubgoal => FaultCode::StaleHeartbeat,
                 Hold::Torn => FaultCode::TornRecord,
                 Hold::OutOfRange => FaultCode::OutOfRange,
             };
+            // (Rare: through a dynamic bus, `&mut G` being one whatever G is.)
+            let mut bus = &mut *g;
             self.shell
                 .life()
-                .degraded(g, code, vme_map::REFLEX_SUBGOAL.offset());
+                .degraded(&mut bus, code, vme_map::REFLEX_SUBGOAL.offset());
         }
         let st = match out.hold {
             Some(Hold::NoSubgoal) | None => BoardState::Running,

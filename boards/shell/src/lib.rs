@@ -40,7 +40,7 @@ impl Shell {
     }
 
     /// Start of a main-loop pass: carries out a diagnostic command from the host, if any.
-    pub fn begin(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
+    pub fn begin<G: GlobalBus + ?Sized>(&mut self, g: &mut G, io: &mut impl IoBus) {
         match self.life.poll_host(g) {
             Some(HostAction::InjectBusError) => {
                 // Never returns on hardware: the read takes a bus error.
@@ -53,7 +53,7 @@ impl Shell {
     }
 
     /// End of a main-loop pass: heartbeat + 1 with `state`. Returns the heartbeat.
-    pub fn end(&mut self, g: &mut dyn GlobalBus, state: BoardState) -> u32 {
+    pub fn end<G: GlobalBus + ?Sized>(&mut self, g: &mut G, state: BoardState) -> u32 {
         self.life.beat(g, state)
     }
 }

@@ -14,16 +14,34 @@
 pub mod trig;
 
 /// round((a * b) / 2^sh) saturated to `i32`; `sh` in 1..=32.
-#[inline]
+#[inline(always)]
 pub fn mul_shr(a: i32, b: i32, sh: u32) -> i32 {
     debug_assert!((1..=32).contains(&sh));
     #[cfg(target_arch = "m68k")]
     {
         extern "C" {
             fn __fx_mul_shr(a: i32, b: i32, sh: u32) -> i32;
+            fn __fx_mul_shr8(a: i32, b: i32) -> i32;
+            fn __fx_mul_shr16(a: i32, b: i32) -> i32;
+            fn __fx_mul_shr17(a: i32, b: i32) -> i32;
+            fn __fx_mul_shr24(a: i32, b: i32) -> i32;
+            fn __fx_mul_shr28(a: i32, b: i32) -> i32;
+            fn __fx_mul_shr32(a: i32, b: i32) -> i32;
         }
-        // SAFETY: a pure function in the runtime's assembly, linked into every image.
-        unsafe { __fx_mul_shr(a, b, sh) }
+        // SAFETY: pure functions in the runtime's assembly, linked into every image. The
+        // shift is a constant wherever this is inlined, so the match folds to one call;
+        // the fixed-shift routines skip the variable shift (half the cycles).
+        unsafe {
+            match sh {
+                8 => __fx_mul_shr8(a, b),
+                16 => __fx_mul_shr16(a, b),
+                17 => __fx_mul_shr17(a, b),
+                24 => __fx_mul_shr24(a, b),
+                28 => __fx_mul_shr28(a, b),
+                32 => __fx_mul_shr32(a, b),
+                _ => __fx_mul_shr(a, b, sh),
+            }
+        }
     }
     #[cfg(not(target_arch = "m68k"))]
     {
@@ -78,8 +96,9 @@ pub fn host_div_shl(num: i32, den: i32, sh: u32) -> i32 {
     q.clamp(i32::MIN as i64, i32::MAX as i64) as i32
 }
 
-/// The host implementation (also the reference the image's assembly is tested against).
-pub fn host_mul_shr(a: i32, b: i32, sh: u32) -> i32 {
+/// The host implementation (also the reference the image's assembly is tested against, and
+/// the form for constants computed at compile time).
+pub const fn host_mul_shr(a: i32, b: i32, sh: u32) -> i32 {
     let p = a as i64 * b as i64 + (1i64 << (sh - 1));
     let r = p >> sh;
     if r > i32::MAX as i64 {

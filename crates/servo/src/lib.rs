@@ -35,24 +35,27 @@ use params::{LinkConst, TIMER_TICK_Q40};
 pub const ONE_Q16: i32 = 1 << 16;
 
 /// Micro-radians to Q16 radians (x 2^16 / 10^6 as a Q32 multiplier, rounded).
+#[inline]
 pub fn urad_to_q16(urad: i32) -> i32 {
     mul_shr(urad, 281_474_977, 32)
 }
 
 /// Q16 radians to micro-radians (x 10^6 / 2^16, rounded).
+#[inline]
 pub fn q16_to_urad(q: i32) -> i32 {
     mul_shr(q, 1_000_000, 16)
 }
 
 /// The regime law III.36 is in, for tests and traces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Regime {
     /// The command is at +-umax (far from the switching curve, or accelerating).
-    Saturated,
+    Saturated = 0,
     /// Inside the boundary layer of the switching curve (|s~| < s_sat), not near the goal.
-    Sliding,
+    Sliding = 1,
     /// Near the goal: every term below saturation, the law acts like PD (K, b).
-    Linear,
+    Linear = 2,
 }
 
 /// omega |omega| c for a Q32 constant `c`: through Q24 so small speeds keep precision.
@@ -102,13 +105,26 @@ pub fn law(k: &LinkConst, brake_q32: i32, err_q16: i32, omega_q16: i32) -> (i32,
 /// (u^ eps / s_sat, u^ / omega_sat); `two_a_q16` is 2 u^ / I with the estimated inertia.
 #[inline(never)]
 pub fn proximate_law(k: &LinkConst, two_a_q16: i32, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
-    let d = err_q16.saturating_abs();
     let yl = mul_shr(two_a_q16, k.yl_per_two_a_q32, 32);
+    let c = mul_shr(two_a_q16, k.c_per_two_a_q32, 32);
+    proximate_law_with(k, two_a_q16, yl, c, err_q16, omega_q16)
+}
+
+/// [`proximate_law`] with its y_l and c for `two_a_q16` given (as [`InertiaEstimate`] keeps
+/// them).
+fn proximate_law_with(
+    k: &LinkConst,
+    two_a_q16: i32,
+    yl: i32,
+    c: i32,
+    err_q16: i32,
+    omega_q16: i32,
+) -> (i32, Regime) {
+    let d = err_q16.saturating_abs();
     let linear = d <= yl;
     let f = if linear {
         -mul_shr(err_q16, k.slope_q16, 16)
     } else {
-        let c = mul_shr(two_a_q16, k.c_per_two_a_q32, 32);
         let v = sqrt_q16(mul_shr(two_a_q16, d, 16)) - c;
         if err_q16 > 0 {
             -v
@@ -183,7 +199,9 @@ pub fn near_goal(k: &LinkConst, u_q16: i32, err_q16: i32, omega_q16: i32) -> i32
 }
 
 /// The notch at a link's first resonance, on the commanded torque (beyond the thesis).
+/// `repr(C)`: `__servo_control` keeps it ([`layout`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct Notch {
     x1: i32,
     x2: i32,
@@ -195,9 +213,10 @@ impl Notch {
     /// Filters one torque sample (Q16 N m); identity when the link has no notch.
     #[inline(never)]
     pub fn filter(&mut self, k: &LinkConst, x_q16: i32) -> i32 {
-        let Some((b0, a1, a2)) = k.notch_q28 else {
+        let [b0, a1, a2] = k.notch_q28;
+        if b0 == 0 {
             return x_q16;
-        };
+        }
         // Plain adds: the input is a torque within +-umax (2^20 in Q16) and the notch's
         // gain is at most a few, so no sum comes near 2^31. (Saturating adds here compiled
         // to a condition-code clobber on the 68k; docs/toolchain.md.)
@@ -214,8 +233,9 @@ impl Notch {
 /// The on-line inertia estimate of one link (beyond the thesis): while the law accelerates
 /// the link at full torque, the impulse applied over the velocity gained is the inertia
 /// (friction makes it a little larger, the safe side for braking). It sets the switching
-/// curve's I / (2 u^).
+/// curve's I / (2 u^). `repr(C)`: `__servo_control` keeps it ([`layout`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, align(4))]
 pub struct InertiaEstimate {
     /// The switching curve's I / (2 u^), Q32 s^2/rad.
     pub brake_q32: i32,
@@ -223,9 +243,12 @@ pub struct InertiaEstimate {
     pub two_a_q16: i32,
     /// The last accepted inertia, Q32 kg m^2 (0 until one is accepted).
     pub inertia_q32: i32,
-    active: bool,
     impulse_q16: i32,
     omega0_q16: i32,
+    /// The proximate law's y_l and c for `two_a_q16`, Q16 (recomputed with it).
+    yl_q16: i32,
+    c_q16: i32,
+    active: bool,
 }
 
 impl InertiaEstimate {
@@ -235,9 +258,11 @@ impl InertiaEstimate {
             brake_q32: k.brake_q32,
             two_a_q16: k.two_a_q16,
             inertia_q32: 0,
-            active: false,
             impulse_q16: 0,
             omega0_q16: 0,
+            yl_q16: k.yl_q16,
+            c_q16: k.c_q16,
+            active: false,
         }
     }
 
@@ -275,12 +300,13 @@ impl InertiaEstimate {
         }
         // (impulse 2^16 2 2^31) / (dw 2^16) = I in Q32.
         let i = div_shl(self.impulse_q16 * 2, dw, 31);
-        let (lo, hi) = k.inertia_bounds_q32;
-        if i >= lo && i <= hi {
+        if i >= k.inertia_lo_q32 && i <= k.inertia_hi_q32 {
             self.inertia_q32 = i;
             self.brake_q32 = mul_shr(i, k.inv_two_uhat_q24, 24);
             // (u^ 2^16 2^31) / (I 2^30) = 2 u^ / I in Q16.
             self.two_a_q16 = div_shl(k.uhat_q16, i >> 2, 31);
+            self.yl_q16 = mul_shr(self.two_a_q16, k.yl_per_two_a_q32, 32);
+            self.c_q16 = mul_shr(self.two_a_q16, k.c_per_two_a_q32, 32);
         }
     }
 }
@@ -322,7 +348,9 @@ pub const OBSERVER_SETTLE_Q32: i32 = 128_849_019;
 /// The position estimate is kept in Q24 (2^-24 rad): in Q16 a velocity estimate below one
 /// LSB per period (0.005 rad/s at 3 kHz) moves the estimate by nothing, so a link at rest
 /// could keep a phantom velocity that the law then damps against, holding torque forever.
+/// `repr(C)`: `__servo_observe` updates it ([`layout`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct Observer {
     theta_q24: i32,
     /// Estimated velocity, Q16 rad/s.
@@ -381,6 +409,278 @@ impl Observer {
             .omega_q16
             .saturating_add(mul_shr(accel, dt, 32))
             .clamp(-k.omega_limit_q16, k.omega_limit_q16);
+    }
+}
+
+/// One link's control state between passes: the inertia estimate, the notch and the torque
+/// last commanded. `repr(C)`: `__servo_control` keeps it on the 68020 ([`layout`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, align(4))]
+pub struct LinkState {
+    /// The inertia estimate and the switching curve it sets.
+    pub est: InertiaEstimate,
+    /// The notch on the command.
+    pub notch: Notch,
+    /// The torque the amplifier produces for the last DAC code, Q16 N m.
+    pub torque_q16: i32,
+}
+
+impl LinkState {
+    /// A link that has commanded nothing yet, with constants `k`.
+    pub const fn new(k: &LinkConst) -> Self {
+        Self {
+            est: InertiaEstimate::new(k),
+            notch: Notch {
+                x1: 0,
+                x2: 0,
+                y1: 0,
+                y2: 0,
+            },
+            torque_q16: 0,
+        }
+    }
+
+    /// Updates observer `obs` with the measured angle `y_q16` over `dt_q32` (the torque last
+    /// commanded acted over it) and returns the arrest point from `y_q16` and the new
+    /// velocity estimate. One call of `__servo_observe` on the 68020; [`Self::observe_rust`]
+    /// elsewhere (the reference that routine is tested against).
+    #[inline]
+    pub fn observe(&self, k: &LinkConst, obs: &mut Observer, y_q16: i32, dt_q32: i32) -> i32 {
+        #[cfg(target_arch = "m68k")]
+        {
+            extern "C" {
+                fn __servo_observe(
+                    k: *const LinkConst,
+                    obs: *mut Observer,
+                    y_q16: i32,
+                    u_q16: i32,
+                    dt_q32: i32,
+                    brake_q32: i32,
+                ) -> i32;
+            }
+            // SAFETY: the routine reads `k` and updates `obs` only, at the offsets `layout`
+            // asserts.
+            unsafe { __servo_observe(k, obs, y_q16, self.torque_q16, dt_q32, self.est.brake_q32) }
+        }
+        #[cfg(not(target_arch = "m68k"))]
+        {
+            self.observe_rust(k, obs, y_q16, dt_q32)
+        }
+    }
+
+    /// [`Self::observe`] in Rust: [`Observer::update`] then [`arrest_point`].
+    pub fn observe_rust(&self, k: &LinkConst, obs: &mut Observer, y_q16: i32, dt_q32: i32) -> i32 {
+        obs.update(k, y_q16, self.torque_q16, dt_q32);
+        arrest_point(self.est.brake_q32, y_q16, obs.omega_q16)
+    }
+
+    /// One pass of the law for position error `err_q16` and velocity `omega_q16`: the law
+    /// ([`proximate_law`] or [`law`]), [`near_goal`], the notch, the DAC code; then the
+    /// inertia estimate (while `settled`, the observers locked) and the torque the code
+    /// makes (`torque_q16`, for the observer's next update). Returns the code and the
+    /// regime. One call of `__servo_control` on the 68020 for the proximate law;
+    /// [`Self::control_rust`] elsewhere (the reference that routine is tested against).
+    #[inline]
+    pub fn control(
+        &mut self,
+        k: &LinkConst,
+        err_q16: i32,
+        omega_q16: i32,
+        dt_q32: i32,
+        settled: bool,
+    ) -> (i16, Regime) {
+        #[cfg(target_arch = "m68k")]
+        if k.proximate {
+            extern "C" {
+                fn __servo_control(
+                    k: *const LinkConst,
+                    s: *mut LinkState,
+                    err_q16: i32,
+                    omega_q16: i32,
+                    dt_q32: i32,
+                    settled: u32,
+                ) -> u32;
+            }
+            // SAFETY: the routine reads `k` and updates `self` only, at the offsets `layout`
+            // asserts.
+            let r = unsafe { __servo_control(k, self, err_q16, omega_q16, dt_q32, settled as u32) };
+            let regime = match r >> 16 {
+                0 => Regime::Saturated,
+                1 => Regime::Sliding,
+                _ => Regime::Linear,
+            };
+            return (r as u16 as i16, regime);
+        }
+        self.control_rust(k, err_q16, omega_q16, dt_q32, settled)
+    }
+
+    /// [`Self::control`] in Rust.
+    pub fn control_rust(
+        &mut self,
+        k: &LinkConst,
+        err_q16: i32,
+        omega_q16: i32,
+        dt_q32: i32,
+        settled: bool,
+    ) -> (i16, Regime) {
+        let (u, r) = if k.proximate {
+            proximate_law_with(
+                k,
+                self.est.two_a_q16,
+                self.est.yl_q16,
+                self.est.c_q16,
+                err_q16,
+                omega_q16,
+            )
+        } else {
+            law(k, self.est.brake_q32, err_q16, omega_q16)
+        };
+        let u = self.notch.filter(k, near_goal(k, u, err_q16, omega_q16));
+        let code = dac_code(k, u);
+        // The torque the amplifier will actually produce, for the observer's next update.
+        let applied = code as i32 * k.nm_per_dac_q16;
+        // Full torque the way the link turns (the code at the DAC's end of range).
+        let full = settled && pushes_at_full_torque(code, omega_q16);
+        self.est
+            .observe(k, full, self.torque_q16, omega_q16, dt_q32);
+        self.torque_q16 = applied;
+        (code, r)
+    }
+}
+
+/// Byte offsets of the structures the servo image's assembly (`__servo_observe`,
+/// `__servo_control` in `crates/rt/asm/rt.S`) reads and writes; the assembly names the
+/// same numbers.
+pub mod layout {
+    use super::{InertiaEstimate, LinkConst, LinkState, Notch, Observer};
+    use core::mem::{offset_of, size_of};
+    const _: () = assert!(offset_of!(LinkConst, rad_per_count_q32) == 0);
+    const _: () = assert!(offset_of!(LinkConst, inv_inertia_q16) == 4);
+    const _: () = assert!(offset_of!(LinkConst, umax_q16) == 8);
+    const _: () = assert!(offset_of!(LinkConst, inv_two_uhat_q24) == 32);
+    const _: () = assert!(offset_of!(LinkConst, inertia_lo_q32) == 36);
+    const _: () = assert!(offset_of!(LinkConst, inertia_hi_q32) == 40);
+    const _: () = assert!(offset_of!(LinkConst, adapt_min_dw_q16) == 44);
+    const _: () = assert!(offset_of!(LinkConst, notch_q28) == 48);
+    const _: () = assert!(offset_of!(LinkConst, friction_comp_q16) == 60);
+    const _: () = assert!(offset_of!(LinkConst, deadband_q16) == 64);
+    const _: () = assert!(offset_of!(LinkConst, moving_q16) == 68);
+    const _: () = assert!(offset_of!(LinkConst, dac_per_nm_q16) == 72);
+    const _: () = assert!(offset_of!(LinkConst, nm_per_dac_q16) == 76);
+    const _: () = assert!(offset_of!(LinkConst, k1_q16) == 80);
+    const _: () = assert!(offset_of!(LinkConst, k2_q8) == 84);
+    const _: () = assert!(offset_of!(LinkConst, omega_limit_q16) == 88);
+    const _: () = assert!(offset_of!(LinkConst, uhat_q16) == 96);
+    const _: () = assert!(offset_of!(LinkConst, b_q16) == 100);
+    const _: () = assert!(offset_of!(LinkConst, slope_q16) == 104);
+    const _: () = assert!(offset_of!(LinkConst, c_per_two_a_q32) == 108);
+    const _: () = assert!(offset_of!(LinkConst, yl_per_two_a_q32) == 112);
+    const _: () = assert!(offset_of!(LinkConst, proximate) == 128);
+    /// Bytes of one link's constants (`repr(C, align(4))`: the same on the 68020, where an
+    /// `i32` aligns to 2, as on the host).
+    pub const LINK_CONST_BYTES: usize = 132;
+    const _: () = assert!(size_of::<LinkConst>() == LINK_CONST_BYTES);
+    const _: () = assert!(offset_of!(Observer, theta_q24) == 0);
+    const _: () = assert!(offset_of!(Observer, omega_q16) == 4);
+    /// Bytes of one observer.
+    pub const OBSERVER_BYTES: usize = 8;
+    const _: () = assert!(size_of::<Observer>() == OBSERVER_BYTES);
+    const _: () = assert!(offset_of!(InertiaEstimate, brake_q32) == 0);
+    const _: () = assert!(offset_of!(InertiaEstimate, two_a_q16) == 4);
+    const _: () = assert!(offset_of!(InertiaEstimate, inertia_q32) == 8);
+    const _: () = assert!(offset_of!(InertiaEstimate, impulse_q16) == 12);
+    const _: () = assert!(offset_of!(InertiaEstimate, omega0_q16) == 16);
+    const _: () = assert!(offset_of!(InertiaEstimate, yl_q16) == 20);
+    const _: () = assert!(offset_of!(InertiaEstimate, c_q16) == 24);
+    const _: () = assert!(offset_of!(InertiaEstimate, active) == 28);
+    const _: () = assert!(size_of::<InertiaEstimate>() == 32);
+    const _: () = assert!(offset_of!(Notch, x1) == 0);
+    const _: () = assert!(offset_of!(Notch, x2) == 4);
+    const _: () = assert!(offset_of!(Notch, y1) == 8);
+    const _: () = assert!(offset_of!(Notch, y2) == 12);
+    const _: () = assert!(offset_of!(LinkState, est) == 0);
+    const _: () = assert!(offset_of!(LinkState, notch) == 32);
+    const _: () = assert!(offset_of!(LinkState, torque_q16) == 48);
+    /// Bytes of one link's control state.
+    pub const LINK_STATE_BYTES: usize = 52;
+    const _: () = assert!(size_of::<LinkState>() == LINK_STATE_BYTES);
+
+    /// Writes the words `w` big-endian from byte 0 on.
+    fn words<const N: usize>(w: &[i32]) -> [u8; N] {
+        let mut b = [0u8; N];
+        for (i, v) in w.iter().enumerate() {
+            b[4 * i..4 * i + 4].copy_from_slice(&v.to_be_bytes());
+        }
+        b
+    }
+
+    /// `k` as the 68020 holds it (big-endian, these offsets): for the tests that load it
+    /// into the emulated CPU's memory.
+    pub fn link_const_be(k: &LinkConst) -> [u8; LINK_CONST_BYTES] {
+        let mut b: [u8; LINK_CONST_BYTES] = words(&[
+            k.rad_per_count_q32,
+            k.inv_inertia_q16,
+            k.umax_q16,
+            k.uhat_over_umax_q16,
+            k.inv_omega_sat_q16,
+            k.eps_q16,
+            k.inv_s_sat_q16,
+            k.brake_q32,
+            k.inv_two_uhat_q24,
+            k.inertia_lo_q32,
+            k.inertia_hi_q32,
+            k.adapt_min_dw_q16,
+            k.notch_q28[0],
+            k.notch_q28[1],
+            k.notch_q28[2],
+            k.friction_comp_q16,
+            k.deadband_q16,
+            k.moving_q16,
+            k.dac_per_nm_q16,
+            k.nm_per_dac_q16,
+            k.k1_q16,
+            k.k2_q8,
+            k.omega_limit_q16,
+            k.linear_band_q16,
+            k.uhat_q16,
+            k.b_q16,
+            k.slope_q16,
+            k.c_per_two_a_q32,
+            k.yl_per_two_a_q32,
+            k.two_a_q16,
+            k.yl_q16,
+            k.c_q16,
+        ]);
+        b[offset_of!(LinkConst, proximate)] = k.proximate as u8;
+        b
+    }
+
+    /// `o` as the 68020 holds it (for the tests).
+    pub fn observer_be(o: &Observer) -> [u8; OBSERVER_BYTES] {
+        words(&[o.theta_q24, o.omega_q16])
+    }
+
+    /// `s` as the 68020 holds it (for the tests).
+    pub fn link_state_be(s: &LinkState) -> [u8; LINK_STATE_BYTES] {
+        let e = &s.est;
+        let n = &s.notch;
+        let mut b: [u8; LINK_STATE_BYTES] = words(&[
+            e.brake_q32,
+            e.two_a_q16,
+            e.inertia_q32,
+            e.impulse_q16,
+            e.omega0_q16,
+            e.yl_q16,
+            e.c_q16,
+            0,
+            n.x1,
+            n.x2,
+            n.y1,
+            n.y2,
+            s.torque_q16,
+        ]);
+        b[offset_of!(InertiaEstimate, active)] = e.active as u8;
+        b
     }
 }
 
@@ -460,9 +760,7 @@ pub struct Servo {
     last_timer: u16,
     links: &'static [LinkConst; 2],
     obs: [Observer; 2],
-    est: [InertiaEstimate; 2],
-    notch: [Notch; 2],
-    torque_q16: [i32; 2],
+    law: [LinkState; 2],
     last_cycle: Option<u32>,
     since_cycle_q32: i32,
     since_start_q32: i32,
@@ -495,17 +793,7 @@ impl Servo {
             last_timer: 0,
             links,
             obs: [Observer::at(0); 2],
-            est: [
-                InertiaEstimate::new(&links[0]),
-                InertiaEstimate::new(&links[1]),
-            ],
-            notch: [Notch {
-                x1: 0,
-                x2: 0,
-                y1: 0,
-                y2: 0,
-            }; 2],
-            torque_q16: [0; 2],
+            law: [LinkState::new(&links[0]), LinkState::new(&links[1])],
             last_cycle: None,
             since_cycle_q32: 0,
             since_start_q32: 0,
@@ -522,58 +810,81 @@ impl Servo {
 
     /// One pass of the servo loop.
     pub fn step(&mut self, input: &Input) -> Output {
-        // Extend the 16-bit counters; the first latch is taken as absolute (the counters are
-        // zeroed with the arm at angle 0 before power-up).
-        let mut theta = [0i32; 2];
-        for (i, t) in theta.iter_mut().enumerate() {
-            if self.started {
-                self.counts[i] = self.counts[i]
-                    .wrapping_add(input.enc[i].wrapping_sub(self.last_enc[i]) as i16 as i32);
-            } else {
-                self.counts[i] = input.enc[i] as i16 as i32;
-            }
-            self.last_enc[i] = input.enc[i];
-            // The middle of the count: the link is somewhere in [n, n + 1) counts, so the
-            // count's floor is biased by half a count (with the goal's dead band of a count,
-            // the link parked up to two counts off the goal).
-            *t = mul_shr(2 * self.counts[i] + 1, self.links[i].rad_per_count_q32, 17);
+        if !self.started {
+            return self.first_step(input);
         }
-        let ticks = input.timer.wrapping_sub(self.last_timer);
-        self.last_timer = input.timer;
-        let dt_q32 = mul_shr(ticks as i32, TIMER_TICK_Q40, 8);
-        let first = !self.started;
+        // Extend the 16-bit counters.
+        let c0 =
+            self.counts[0].wrapping_add(input.enc[0].wrapping_sub(self.last_enc[0]) as i16 as i32);
+        let c1 =
+            self.counts[1].wrapping_add(input.enc[1].wrapping_sub(self.last_enc[1]) as i16 as i32);
+        let (ticks, dt_q32) = self.take_counts(input, [c0, c1]);
+        let theta = [self.angle(0), self.angle(1)];
         // The observers start at rest: until they have locked onto a link that was already
         // moving, the velocity they report is not the torque's doing.
-        let settled = self.observers_settled(first, dt_q32);
-        if first {
-            self.started = true;
-            for (o, &t) in self.obs.iter_mut().zip(&theta) {
-                *o = Observer::at(t);
-            }
-        } else {
-            for (i, &t) in theta.iter().enumerate() {
-                self.obs[i].update(&self.links[i], t, self.torque_q16[i], dt_q32);
-            }
-        }
-        let omega = [self.obs[0].omega_q16, self.obs[1].omega_q16];
+        let settled = self.observers_settled(dt_q32);
+        let [l0, l1] = &mut self.law;
+        let [o0, o1] = &mut self.obs;
         let arrest = [
-            arrest_point(self.est[0].brake_q32, theta[0], omega[0]),
-            arrest_point(self.est[1].brake_q32, theta[1], omega[1]),
+            l0.observe(&self.links[0], o0, theta[0], dt_q32),
+            l1.observe(&self.links[1], o1, theta[1], dt_q32),
         ];
-
+        let omega = [o0.omega_q16, o1.omega_q16];
         // The goal: the subgoal while it is fresh and plausible, else hold at the arrest point.
-        // The log's clock: the sum of the pass periods, Q24 s.
-        self.log.push(
-            self.log.newest_t().wrapping_add((dt_q32 >> 8) as u32),
-            arrest,
+        let (goal, new_fault) = self.log_and_choose_goal(input.subgoal, dt_q32, arrest, false);
+        let [l0, l1] = &mut self.law;
+        let (d0, r0) = l0.control(
+            &self.links[0],
+            theta[0] - goal[0],
+            omega[0],
+            dt_q32,
+            settled,
         );
-        let (goal, new_fault) = self.choose_goal(input.subgoal, dt_q32, arrest, first);
-
-        let mut out = Output {
-            dac: [0; 2],
-            enable: !first,
+        let (d1, r1) = l1.control(
+            &self.links[1],
+            theta[1] - goal[1],
+            omega[1],
+            dt_q32,
+            settled,
+        );
+        Output {
+            dac: [d0, d1],
+            enable: true,
             theta_q16: theta,
             omega_q16: omega,
+            arrest_q16: arrest,
+            torque_q16: [l0.torque_q16, l1.torque_q16],
+            goal_q16: goal,
+            period_ticks: ticks,
+            hold: self.hold,
+            new_fault,
+            regime: [r0, r1],
+        }
+    }
+
+    /// The first pass: the first latch is taken as absolute (the counters are zeroed with
+    /// the arm at angle 0 before power-up), the observers start at rest on it, and nothing
+    /// is commanded (no time base yet).
+    #[cold]
+    #[inline(never)]
+    fn first_step(&mut self, input: &Input) -> Output {
+        let counts = [input.enc[0] as i16 as i32, input.enc[1] as i16 as i32];
+        let (ticks, dt_q32) = self.take_counts(input, counts);
+        let theta = [self.angle(0), self.angle(1)];
+        self.started = true;
+        self.obs = [Observer::at(theta[0]), Observer::at(theta[1])];
+        // At rest: the arrest point is the angle.
+        let arrest = theta;
+        let (goal, new_fault) = self.log_and_choose_goal(input.subgoal, dt_q32, arrest, true);
+        for (s, k) in self.law.iter_mut().zip(self.links) {
+            s.est.observe(k, false, 0, 0, dt_q32);
+            s.torque_q16 = 0;
+        }
+        Output {
+            dac: [0; 2],
+            enable: false,
+            theta_q16: theta,
+            omega_q16: [0; 2],
             arrest_q16: arrest,
             torque_q16: [0; 2],
             goal_q16: goal,
@@ -581,60 +892,48 @@ impl Servo {
             hold: self.hold,
             new_fault,
             regime: [Regime::Linear; 2],
-        };
-        for i in 0..2 {
-            let (code, applied, r) =
-                self.control_link(i, first, settled, theta[i] - goal[i], omega[i], dt_q32);
-            out.dac[i] = code;
-            out.torque_q16[i] = applied;
-            out.regime[i] = r;
         }
-        out
     }
 
-    /// The law, near-goal corrections, notch and DAC scaling for link `i` with position
-    /// error `err_q16` and velocity `omega_q16`; returns the DAC code, the torque it makes
-    /// and the regime. Nothing is commanded on the `first` pass (no time base yet).
-    /// (A function of its own: inlined into `step`, the branch on `first` compiled to a
-    /// condition-code clobber on the 68k; docs/toolchain.md.)
-    #[inline(never)]
-    fn control_link(
+    /// Keeps this pass's extended counts and encoder latches and the timer; returns the
+    /// period in timer ticks and in Q32 seconds.
+    #[inline(always)]
+    fn take_counts(&mut self, input: &Input, counts: [i32; 2]) -> (u16, i32) {
+        self.counts = counts;
+        self.last_enc = input.enc;
+        let ticks = input.timer.wrapping_sub(self.last_timer);
+        self.last_timer = input.timer;
+        (ticks, mul_shr(ticks as i32, TIMER_TICK_Q40, 8))
+    }
+
+    /// Link `i`'s angle from its extended count: the middle of the count (the link is
+    /// somewhere in [n, n + 1) counts, so the count's floor is biased by half a count; with
+    /// the goal's dead band of a count, the link parked up to two counts off the goal).
+    #[inline(always)]
+    fn angle(&self, i: usize) -> i32 {
+        mul_shr(2 * self.counts[i] + 1, self.links[i].rad_per_count_q32, 17)
+    }
+
+    /// Logs the pass's arrest points (the log's clock: the sum of the pass periods, Q24 s)
+    /// and chooses the goal.
+    #[inline(always)]
+    fn log_and_choose_goal(
         &mut self,
-        i: usize,
-        first: bool,
-        settled: bool,
-        err_q16: i32,
-        omega_q16: i32,
+        sub: Option<Subgoal>,
         dt_q32: i32,
-    ) -> (i16, i32, Regime) {
-        let k = &self.links[i];
-        if first {
-            self.est[i].observe(k, false, 0, omega_q16, dt_q32);
-            self.torque_q16[i] = 0;
-            return (0, 0, Regime::Linear);
-        }
-        let (u, r) = if k.proximate {
-            proximate_law(k, self.est[i].two_a_q16, err_q16, omega_q16)
-        } else {
-            law(k, self.est[i].brake_q32, err_q16, omega_q16)
-        };
-        let u = self.notch[i].filter(k, near_goal(k, u, err_q16, omega_q16));
-        let code = dac_code(k, u);
-        // The torque the amplifier will actually produce, for the observer's next update.
-        let applied = code as i32 * k.nm_per_dac_q16;
-        // Full torque the way the link turns (the code at the DAC's end of range).
-        let full = settled && pushes_at_full_torque(code, omega_q16);
-        self.est[i].observe(k, full, self.torque_q16[i], omega_q16, dt_q32);
-        self.torque_q16[i] = applied;
-        (code, applied, r)
+        arrest: [i32; 2],
+        first: bool,
+    ) -> ([i32; 2], Option<Hold>) {
+        self.log.push(
+            self.log.newest_t().wrapping_add((dt_q32 >> 8) as u32),
+            arrest,
+        );
+        self.choose_goal(sub, dt_q32, arrest, first)
     }
 
     /// Accounts for the time since start-up; true once the observers count as locked.
     #[inline(never)]
-    fn observers_settled(&mut self, first: bool, dt_q32: i32) -> bool {
-        if first {
-            return false;
-        }
+    fn observers_settled(&mut self, dt_q32: i32) -> bool {
         if self.since_start_q32 >= OBSERVER_SETTLE_Q32 {
             return true;
         }

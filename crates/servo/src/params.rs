@@ -181,8 +181,11 @@ const DAC_FS_V: f64 = regs::servo::DAC_FULL_SCALE_MV as f64 / 1000.0;
 /// Seconds per 2 MHz timer tick in Q40 (2^40 / 2e6).
 pub const TIMER_TICK_Q40: i32 = fit(round(Q32 * 256.0 / regs::servo::TIMER_HZ as f64));
 
-/// The fixed-point constants of one link.
+/// The fixed-point constants of one link. `repr(C)`: the servo image's assembly
+/// (`__servo_observe`, `__servo_control` in `crates/rt/asm/rt.S`) reads them at the offsets
+/// [`crate::layout`] asserts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, align(4))]
 pub struct LinkConst {
     /// Radians per encoder count, Q32.
     pub rad_per_count_q32: i32,
@@ -203,14 +206,16 @@ pub struct LinkConst {
     pub brake_q32: i32,
     /// 1 / (2 u^), Q24 1/(N m): turns an inertia estimate into the switching curve.
     pub inv_two_uhat_q24: i32,
-    /// Smallest and largest plausible inertia estimate, Q32 kg m^2 (0.7 and 1.5 x nominal).
-    pub inertia_bounds_q32: (i32, i32),
+    /// Smallest plausible inertia estimate, Q32 kg m^2 (0.7 x nominal).
+    pub inertia_lo_q32: i32,
+    /// Largest plausible inertia estimate, Q32 kg m^2 (1.5 x nominal).
+    pub inertia_hi_q32: i32,
     /// Velocity gained under full torque before the inertia is estimated (15 ms of it), Q16
     /// rad/s; 0 = no estimation.
     pub adapt_min_dw_q16: i32,
-    /// Notch coefficients, Q28: y = b0 (x + x2) + a1 (x1 - y1) - a2 y2 (b2 = b0, b1 = a1
-    /// for a notch); `None` = no notch.
-    pub notch_q28: Option<(i32, i32, i32)>,
+    /// Notch coefficients (b0, a1, a2), Q28: y = b0 (x + x2) + a1 (x1 - y1) - a2 y2
+    /// (b2 = b0, b1 = a1 for a notch); b0 = 0 = no notch (a notch's b0 is 1 / (1 + alpha)).
+    pub notch_q28: [i32; 3],
     /// Coulomb friction compensation, Q16 N m.
     pub friction_comp_q16: i32,
     /// The dead band of the goal ([`DEADBAND_COUNTS`]; 0 = none, the thesis's law), Q16 rad: at rest
@@ -232,8 +237,6 @@ pub struct LinkConst {
     pub linear_band_q16: i32,
     /// u^, Q16 N m.
     pub uhat_q16: i32,
-    /// Run [`crate::proximate_law`] (else [`crate::law`]).
-    pub proximate: bool,
     /// Velocity gain of the proximate law near the goal, b = u^ / omega_sat, Q16 N m s/rad.
     pub b_q16: i32,
     /// K / b = (u^ eps / s_sat) / b, the slope of the proximate law's linear region, Q16 1/s.
@@ -244,6 +247,15 @@ pub struct LinkConst {
     pub yl_per_two_a_q32: i32,
     /// 2 u^ / I, Q16 rad/s^2 (for an adaptive law, with the prior inertia).
     pub two_a_q16: i32,
+    /// The proximate law's y_l and c for `two_a_q16` (`mul_shr` of it by `yl_per_two_a_q32`
+    /// and `c_per_two_a_q32`, shift 32), Q16: where [`crate::InertiaEstimate`] starts.
+    /// Computed here, at compile time: the host's 64-bit multiply must not run on the
+    /// 68020 (docs/toolchain.md).
+    pub yl_q16: i32,
+    /// See `yl_q16`.
+    pub c_q16: i32,
+    /// Run [`crate::proximate_law`] (else [`crate::law`]).
+    pub proximate: bool,
 }
 
 /// A constant as `i32`; a value that does not fit fails the build.
@@ -272,6 +284,9 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
     // Until the inertia is measured, an adaptive law brakes as if it were the heaviest
     // expected (a payload), so that its first move cannot overshoot.
     let prior = if p.adaptive { PRIOR_INERTIA_SCALE } else { 1.0 };
+    let c_per_two_a_q32 = fit(round(Q32 * b / (4.0 * kp)));
+    let yl_per_two_a_q32 = fit(round(Q32 * (b / (2.0 * kp)) * (b / (2.0 * kp))));
+    let two_a_q16 = fit(round(Q16 * 2.0 * p.uhat_nm / (prior * l.inertia_kgm2)));
     LinkConst {
         rad_per_count_q32: fit(round(
             Q32 * core::f64::consts::TAU / l.counts_per_rev as f64,
@@ -284,10 +299,8 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         inv_s_sat_q16: fit(round(Q16 / p.s_sat_rad)),
         brake_q32: fit(round(Q32 * prior * l.inertia_kgm2 / (2.0 * p.uhat_nm))),
         inv_two_uhat_q24: fit(round(Q16 * 256.0 / (2.0 * p.uhat_nm))),
-        inertia_bounds_q32: (
-            fit(round(Q32 * 0.7 * l.inertia_kgm2)),
-            fit(round(Q32 * 1.5 * l.inertia_kgm2)),
-        ),
+        inertia_lo_q32: fit(round(Q32 * 0.7 * l.inertia_kgm2)),
+        inertia_hi_q32: fit(round(Q32 * 1.5 * l.inertia_kgm2)),
         adapt_min_dw_q16: if p.adaptive {
             fit(round(Q16 * 0.015 * p.umax_nm / l.inertia_kgm2))
         } else {
@@ -310,30 +323,32 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         omega_limit_q16: fit(round(Q16 * 2.0 * l.max_speed_rad_s)),
         linear_band_q16: fit(round(Q16 * p.s_sat_rad)),
         uhat_q16: fit(round(Q16 * p.uhat_nm)),
-        proximate: p.proximate,
         b_q16: fit(round(Q16 * b)),
         slope_q16: fit(round(Q16 * kp / b)),
-        c_per_two_a_q32: fit(round(Q32 * b / (4.0 * kp))),
-        yl_per_two_a_q32: fit(round(Q32 * (b / (2.0 * kp)) * (b / (2.0 * kp)))),
-        two_a_q16: fit(round(Q16 * 2.0 * p.uhat_nm / (prior * l.inertia_kgm2))),
+        c_per_two_a_q32,
+        yl_per_two_a_q32,
+        two_a_q16,
+        yl_q16: fx::host_mul_shr(two_a_q16, yl_per_two_a_q32, 32),
+        c_q16: fx::host_mul_shr(two_a_q16, c_per_two_a_q32, 32),
+        proximate: p.proximate,
     }
 }
 
 /// Notch biquad at `hz` with quality `q` for period `period_s` (bilinear design with
-/// pre-warping, RBJ cookbook): (b0, a1, a2) in Q28.
-const fn notch(hz: f64, q: f64, period_s: f64) -> Option<(i32, i32, i32)> {
+/// pre-warping, RBJ cookbook): (b0, a1, a2) in Q28; all zero for `q` <= 0 (no notch).
+const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
     if q <= 0.0 {
-        return None;
+        return [0; 3];
     }
     let w0 = core::f64::consts::TAU * hz * period_s;
     let alpha = sin(w0) / (2.0 * q);
     let a0 = 1.0 + alpha;
     let q28 = Q32 / 16.0;
-    Some((
+    [
         fit(round(q28 / a0)),
         fit(round(q28 * -2.0 * cos(w0) / a0)),
         fit(round(q28 * (1.0 - alpha) / a0)),
-    ))
+    ]
 }
 
 /// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz

@@ -292,7 +292,7 @@ impl Lifecycle {
 
     /// Ends one main-loop pass: heartbeat + 1 and state `state` (normally `Running`).
     /// Returns the new heartbeat.
-    pub fn beat(&mut self, bus: &mut dyn crate::GlobalBus, state: BoardState) -> u32 {
+    pub fn beat<G: crate::GlobalBus + ?Sized>(&mut self, bus: &mut G, state: BoardState) -> u32 {
         let hb = self.slot.beat(bus);
         let st = self.slot.status_word(bus);
         if st.state() != Some(state) {
@@ -315,8 +315,19 @@ impl Lifecycle {
     }
 
     /// Checks the host command record for a new command addressed to this board.
-    pub fn poll_host(&mut self, bus: &mut dyn crate::GlobalBus) -> Option<HostAction> {
-        let (cmd, _) = crate::layout::HOST_COMMAND.read(bus).ok()?;
+    ///
+    /// Every pass reads only the command's serial word, outside the lock; a new serial (or
+    /// one caught mid-write) is then read whole under the lock, and a torn read leaves
+    /// the serial unconsumed, so the next pass tries again.
+    pub fn poll_host<G: crate::GlobalBus + ?Sized>(&mut self, bus: &mut G) -> Option<HostAction> {
+        use crate::records::{host_cmd, HostCommand};
+        let cmd = crate::layout::HOST_COMMAND;
+        if bus.read_u32(cmd.word_offset(HostCommand::SERIAL_WORD)) == self.last_serial {
+            return None;
+        }
+        let mut w = [0u32; <HostCommand as crate::record::Record>::WORDS as usize];
+        cmd.read_raw(bus, &mut w).ok()?;
+        let cmd = HostCommand::from_words(&w);
         if cmd.serial == self.last_serial {
             return None;
         }
@@ -324,7 +335,6 @@ impl Lifecycle {
         if cmd.arg0 != self.id.index() {
             return None;
         }
-        use crate::records::host_cmd;
         match cmd.command {
             host_cmd::INJECT_BUS_ERROR => Some(HostAction::InjectBusError),
             host_cmd::INJECT_PANIC => Some(HostAction::InjectPanic),
@@ -336,7 +346,7 @@ impl Lifecycle {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bus::ArrayBus;
+    use crate::bus::{ArrayBus, GlobalBus};
     use crate::layout::{init_header, BoardSlot, HOST_COMMAND};
     use crate::records::{host_cmd, HostCommand};
 
@@ -376,6 +386,31 @@ mod tests {
         HOST_COMMAND.publish(&mut bus, &cmd);
         assert_eq!(reflex.poll_host(&mut bus), None);
         assert_eq!(servo.poll_host(&mut bus), Some(HostAction::InjectPanic));
+        assert_eq!(servo.poll_host(&mut bus), None);
+    }
+
+    /// A command caught mid-publish (its serial already new, the sequence odd) is not
+    /// consumed: the board acts on it once the record is whole.
+    #[test]
+    fn a_host_command_caught_mid_write_is_taken_when_whole() {
+        let mut mem = [0u8; 0x1000];
+        let mut bus = ArrayBus::new(&mut mem);
+        init_header(&mut bus);
+        let mut servo = Lifecycle::new(BoardId::Servo);
+        assert!(servo.boot(&mut bus));
+        let cmd = HostCommand {
+            command: host_cmd::INJECT_BUS_ERROR,
+            arg0: 1,
+            arg1: 0,
+            serial: 7,
+        };
+        HOST_COMMAND.publish(&mut bus, &cmd);
+        let seq = bus.read_u32(HOST_COMMAND.offset());
+        bus.write_u32(HOST_COMMAND.offset(), seq | 1);
+        assert_eq!(servo.poll_host(&mut bus), None);
+        assert_eq!(servo.poll_host(&mut bus), None);
+        bus.write_u32(HOST_COMMAND.offset(), seq);
+        assert_eq!(servo.poll_host(&mut bus), Some(HostAction::InjectBusError));
         assert_eq!(servo.poll_host(&mut bus), None);
     }
 }

@@ -64,19 +64,19 @@ impl BoardSlot {
     }
 
     /// Advances the heartbeat by one and returns the new count. Only the slot's board calls it.
-    pub fn beat(self, bus: &mut dyn GlobalBus) -> u32 {
+    pub fn beat<G: GlobalBus + ?Sized>(self, bus: &mut G) -> u32 {
         let hb = bus.read_u32(self.heartbeat()).wrapping_add(1);
         bus.write_u32(self.heartbeat(), hb);
         hb
     }
 
     /// Reads the status word.
-    pub fn status_word(self, bus: &mut dyn GlobalBus) -> StatusWord {
+    pub fn status_word<G: GlobalBus + ?Sized>(self, bus: &mut G) -> StatusWord {
         StatusWord(bus.read_u32(self.status()))
     }
 
     /// Sets the board's state, keeping its fault code and count.
-    pub fn set_state(self, bus: &mut dyn GlobalBus, state: BoardState) {
+    pub fn set_state<G: GlobalBus + ?Sized>(self, bus: &mut G, state: BoardState) {
         let w = bus.read_u32(self.status());
         bus.write_u32(self.status(), (w & !0xFF) | state as u32);
     }

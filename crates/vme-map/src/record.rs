@@ -83,7 +83,46 @@ macro_rules! record {
                 Self { $($field),+ }
             }
         }
+
+        impl $name {
+            /// The record's words in order, as [`$crate::record::SeqLock::publish_raw`]
+            /// writes them (no dynamic calls, unlike [`$crate::record::Record::encode`]).
+            pub fn to_words(&self) -> [u32; <Self as $crate::record::Record>::WORDS as usize] {
+                [$($crate::record::Word::to_word(self.$field)),+]
+            }
+
+            /// The record from its words, as [`$crate::record::SeqLock::read_raw`] reads
+            /// them.
+            pub fn from_words(w: &[u32; <Self as $crate::record::Record>::WORDS as usize]) -> Self {
+                let mut _i = 0usize;
+                $(
+                    let $field = <$ty as $crate::record::Word>::from_word(w[_i]);
+                    _i += 1;
+                )+
+                Self { $($field),+ }
+            }
+        }
     };
+}
+
+/// The index among a record's words of the field called `name` (in `fields`, a record's
+/// [`Record::FIELDS`]), at compile time; a name that is not there fails the build.
+pub const fn word_index(fields: &[&str], name: &str) -> u32 {
+    let mut i = 0;
+    while i < fields.len() {
+        let (a, b) = (fields[i].as_bytes(), name.as_bytes());
+        if a.len() == b.len() {
+            let mut k = 0;
+            while k < a.len() && a[k] == b[k] {
+                k += 1;
+            }
+            if k == a.len() {
+                return i as u32;
+            }
+        }
+        i += 1;
+    }
+    panic!("no such field in the record")
 }
 
 /// A read that kept racing the writer: the record is not usable this time.
@@ -121,6 +160,11 @@ impl<R: Record> SeqLock<R> {
     /// Byte offset of the slot (its sequence word).
     pub const fn offset(&self) -> u32 {
         self.off
+    }
+
+    /// Offset of the record's word `i` (after the sequence word).
+    pub const fn word_offset(&self, i: u32) -> u32 {
+        self.off + 4 + 4 * i
     }
 
     /// The current sequence number (even when no write is in progress).

@@ -409,6 +409,12 @@ record! {
     }
 }
 
+impl HostCommand {
+    /// Which of the record's words is `serial` (boards poll that word alone).
+    pub const SERIAL_WORD: u32 =
+        crate::record::word_index(<Self as crate::record::Record>::FIELDS, "serial");
+}
+
 /// Number of entries in the C-space work list.
 pub const WORK_ENTRIES: usize = 16;
 

@@ -1,0 +1,471 @@
+/* The servo board's per-link control pass in 68020 assembly (crates/servo; thesis ch. III,
+ * Appendix A; docs/servo.md "Fixed point on the 68020").
+ *
+ * Two routines, each bit-identical to the Rust it replaces on the image (the system test
+ * tests/tests/firmware_functions.rs runs both against the host's code on random states):
+ *
+ *   i32 __servo_observe(const LinkConst *k, Observer *o, i32 y_q16, i32 u_q16, i32 dt_q32,
+ *                       i32 brake_q32)
+ *       = servo::LinkState::observe_rust: Observer::update, then the arrest point.
+ *   u32 __servo_control(const LinkConst *k, LinkState *s, i32 err_q16, i32 omega_q16,
+ *                       i32 dt_q32, u32 settled)
+ *       = servo::LinkState::control_rust for the proximate law: the law, near_goal, the
+ *         notch, the DAC code, the inertia estimate; returns the code in the low word and
+ *         the regime (0 saturated, 1 sliding, 2 linear) in the high word.
+ *
+ * The compiled pass took some 18,000 cycles for both links, a third of it in 41 calls of
+ * __fx_mul_shr with its variable shift; here every product is a MULS.L with the shift
+ * fixed by a macro, and the state stays in registers.
+ *
+ * Structure offsets: servo::layout asserts the same numbers. */
+
+    /* LinkConst */
+    .equ K_INV_I, 4
+    .equ K_UMAX, 8
+    .equ K_INV_2UHAT, 32
+    .equ K_ILO, 36
+    .equ K_IHI, 40
+    .equ K_ADAPT, 44
+    .equ K_B0, 48
+    .equ K_A1, 52
+    .equ K_A2, 56
+    .equ K_FRIC, 60
+    .equ K_DEADBAND, 64
+    .equ K_MOVING, 68
+    .equ K_DAC_PER_NM, 72
+    .equ K_NM_PER_DAC, 76
+    .equ K_K1, 80
+    .equ K_K2, 84
+    .equ K_OMLIM, 88
+    .equ K_UHAT, 96
+    .equ K_B, 100
+    .equ K_SLOPE, 104
+    .equ K_CPER, 108
+    .equ K_YLPER, 112
+    /* Observer */
+    .equ O_THETA, 0
+    .equ O_OMEGA, 4
+    /* LinkState: InertiaEstimate, Notch, torque */
+    .equ E_BRAKE, 0
+    .equ E_TWOA, 4
+    .equ E_INERTIA, 8
+    .equ E_IMPULSE, 12
+    .equ E_OMEGA0, 16
+    .equ E_YL, 20
+    .equ E_C, 24
+    .equ E_ACTIVE, 28
+    .equ N_X1, 32
+    .equ N_X2, 36
+    .equ N_Y1, 40
+    .equ N_Y2, 44
+    .equ S_TORQUE, 48
+    /* servo::MAX_DT_Q32 (10 ms), regs::servo::DAC_MAX / DAC_MIN */
+    .equ MAX_DT_Q32, 42949673
+    .equ DAC_MAX, 2047
+    .equ DAC_MIN, -2048
+    .equ ONE_Q16, 65536
+
+/* SATV r: right after an ADD or SUB into r, saturate r if it overflowed (V): to i32::MAX
+ * when the wrapped result is negative (the true one positive), else to i32::MIN. Rust's
+ * saturating_add / saturating_sub. */
+.macro SATV r
+    bvc.s   .Lsv\@
+    bmi.s   .Lsp\@
+    move.l  #0x80000000, \r
+    bra.s   .Lsv\@
+.Lsp\@:
+    move.l  #0x7fffffff, \r
+.Lsv\@:
+.endm
+
+/* SATABS r: r = |r|, i32::MIN giving i32::MAX (saturating_abs). */
+.macro SATABS r
+    tst.l   \r
+    bpl.s   .Lab\@
+    neg.l   \r
+    bpl.s   .Lab\@
+    move.l  #0x7fffffff, \r
+.Lab\@:
+.endm
+
+/* SATASL8 r, t: r = r * 256 saturated (saturating_mul(256)); t scratch. */
+.macro SATASL8 r, t
+    move.l  \r, \t
+    asl.l   #8, \r
+    bvc.s   .Las\@
+    move.l  #0x7fffffff, \r
+    tst.l   \t
+    bpl.s   .Las\@
+    addq.l  #1, \r
+.Las\@:
+.endm
+
+/* MULSHR a, b, sh, h, t: a = round(a * b / 2^sh) saturated to i32, fx::mul_shr with a
+ * fixed shift (8, 16, 17, 24, 28 or 32); b any data addressing mode, h a scratch data
+ * register, t a scratch data or address register, z (optional) a scratch data register
+ * for the rounding carry (MOVEQ and ADDX: faster than the branch without it). The 64-bit product of MULS.L plus
+ * 2^(sh-1); it fits in 32 bits after the shift when h + 2^(sh-1) < 2^sh (unsigned);
+ * otherwise the sign of h says which way it saturates (that branch is out of line). */
+.macro MULSHR a, b, sh, h, t, z
+    muls.l  \b, \h:\a
+.if \sh == 32
+    tst.l   \a
+    bpl.s   .Lmr\@
+    addq.l  #1, \h
+.Lmr\@:
+    move.l  \h, \a
+.else
+    add.l   #(1 << (\sh - 1)), \a
+  .ifb \z
+    bcc.s   .Lmr\@
+    addq.l  #1, \h
+.Lmr\@:
+  .else
+    moveq   #0, \z
+    addx.l  \z, \h
+  .endif
+    move.l  \h, \t
+    add.l   #(1 << (\sh - 1)), \t
+    cmp.l   #(1 << \sh), \t
+    bcc     .Lms\@
+  .if \sh == 8
+    lsr.l   #8, \a
+    swap    \h
+    clr.w   \h
+    lsl.l   #8, \h
+    or.l    \h, \a
+  .elseif \sh == 16
+    move.w  \h, \a
+    swap    \a
+  .elseif \sh == 17
+    clr.w   \a
+    swap    \a
+    lsr.l   #1, \a
+    lsl.l   #8, \h
+    lsl.l   #7, \h
+    or.l    \h, \a
+  .elseif \sh == 24
+    lsl.l   #8, \h
+    rol.l   #8, \a
+    move.b  \a, \h
+    move.l  \h, \a
+  .elseif \sh == 28
+    rol.l   #4, \a
+    andi.l  #15, \a
+    lsl.l   #4, \h
+    or.l    \h, \a
+  .else
+    .error "MULSHR: unsupported shift"
+  .endif
+.Lmd\@:
+    .subsection 1
+.Lms\@:
+    move.l  #0x7fffffff, \a
+    tst.l   \h
+    bpl     .Lmd\@
+    addq.l  #1, \a
+    bra     .Lmd\@
+    .subsection 0
+.endif
+.endm
+
+/* i32 __fx_mul_shrN(i32 a, i32 b) for N = 8, 16, 17, 24, 28, 32: fx::mul_shr(a, b, N)
+ * without the variable shift of __fx_mul_shr (fx::mul_shr calls these for those shifts). */
+.macro MULSHR_FN sh
+    .section .text.__fx_mul_shr\sh, "ax"
+    .globl __fx_mul_shr\sh
+__fx_mul_shr\sh:
+    move.l  4(%sp), %d0
+    MULSHR  %d0, 8(%sp), \sh, %d1, %a0
+    rts
+.endm
+    MULSHR_FN 8
+    MULSHR_FN 16
+    MULSHR_FN 17
+    MULSHR_FN 24
+    MULSHR_FN 28
+    MULSHR_FN 32
+
+/* CLAMP r, lim, t: r = clamp(r, -lim, lim) for lim >= 0 (any data mode); t scratch. */
+.macro CLAMP r, lim, t
+    move.l  \lim, \t
+    cmp.l   \t, \r
+    ble.s   .Lc1\@
+    move.l  \t, \r
+    bra.s   .Lc2\@
+.Lc1\@:
+    neg.l   \t
+    cmp.l   \t, \r
+    bge.s   .Lc2\@
+    move.l  \t, \r
+.Lc2\@:
+.endm
+
+/* ---- i32 __servo_observe(k, o, y_q16, u_q16, dt_q32, brake_q32) ---- */
+    .section .text.__servo_observe, "ax"
+    .globl __servo_observe
+__servo_observe:
+    movem.l %d2-%d7, -(%sp)     /* arguments now at 28, 32, 36, 40, 44, 48 */
+    movea.l 28(%sp), %a0        /* k */
+    movea.l 32(%sp), %a1        /* o */
+    move.l  36(%sp), %d2        /* y */
+    move.l  44(%sp), %d3        /* dt = min(dt, MAX_DT) */
+    cmpi.l  #MAX_DT_Q32, %d3
+    ble     1f
+    move.l  #MAX_DT_Q32, %d3
+1:  /* e = sat(y * 256) - theta24, saturating (Q24) */
+    move.l  %d2, %d4
+    SATASL8 %d4, %d7
+    sub.l   O_THETA(%a1), %d4
+    SATV    %d4
+    /* implausible when |e| > sat(sat(mul_shr(omega_limit, dt, 32) + 0.01 rad) * 256) */
+    move.l  K_OMLIM(%a0), %d0
+    MULSHR  %d0, %d3, 32, %d1, %d7, %d7
+    addi.l  #655, %d0
+    SATV    %d0
+    SATASL8 %d0, %d7
+    move.l  %d4, %d1
+    SATABS  %d1
+    cmp.l   %d0, %d1
+    bgt     9f
+    /* friction the law compensates: f the way the link turns; at rest clamp(u, -f, f) */
+    move.l  O_OMEGA(%a1), %d5   /* omega */
+    move.l  40(%sp), %d6        /* u */
+    move.l  K_FRIC(%a0), %d7
+    move.l  K_MOVING(%a0), %d0
+    cmp.l   %d0, %d5
+    bgt     4f                  /* turning +: f */
+    neg.l   %d0
+    cmp.l   %d0, %d5
+    blt     3f                  /* turning -: -f */
+    cmp.l   %d7, %d6
+    bgt     4f                  /* u > f: f */
+    neg.l   %d7
+    cmp.l   %d7, %d6
+    blt     4f                  /* u < -f: -f */
+    move.l  %d6, %d7            /* u */
+    bra     4f
+3:  neg.l   %d7
+4:  sub.l   %d7, %d6            /* net = u - friction, saturating */
+    SATV    %d6
+    /* dtheta = sat(omega + mul_shr(k1, e, 24)); theta24 = sat(theta24 + mul_shr(dtheta, dt, 24)) */
+    move.l  K_K1(%a0), %d0
+    MULSHR  %d0, %d4, 24, %d1, %d7, %d7
+    add.l   %d5, %d0
+    SATV    %d0
+    MULSHR  %d0, %d3, 24, %d1, %d7, %d7
+    add.l   O_THETA(%a1), %d0
+    SATV    %d0
+    move.l  %d0, O_THETA(%a1)
+    /* accel = sat(mul_shr(net, 1/I, 16) + mul_shr(k2, e, 16)) */
+    move.l  K_INV_I(%a0), %d0
+    MULSHR  %d0, %d6, 16, %d1, %d7, %d7
+    move.l  %d0, %d6
+    move.l  K_K2(%a0), %d0
+    MULSHR  %d0, %d4, 16, %d1, %d7, %d7
+    add.l   %d6, %d0
+    SATV    %d0
+    /* omega = clamp(sat(omega + mul_shr(accel, dt, 32)), -limit, limit) */
+    MULSHR  %d0, %d3, 32, %d1, %d7, %d7
+    add.l   %d5, %d0
+    SATV    %d0
+    CLAMP   %d0, K_OMLIM(%a0), %d1
+    move.l  %d0, O_OMEGA(%a1)
+    /* arrest = sat(y + mul_shr(mul_shr(omega, brake, 24), |omega|, 24)) */
+    move.l  %d0, %d5
+    MULSHR  %d0, 48(%sp), 24, %d1, %d7, %d7
+    SATABS  %d5
+    MULSHR  %d0, %d5, 24, %d1, %d7, %d7
+    add.l   %d2, %d0
+    SATV    %d0
+    movem.l (%sp)+, %d2-%d7
+    rts
+9:  /* implausible: re-lock at rest on the measurement (theta24 = y << 8, wrapping);
+     * the arrest point is then y */
+    move.l  %d2, %d0
+    lsl.l   #8, %d0
+    move.l  %d0, O_THETA(%a1)
+    clr.l   O_OMEGA(%a1)
+    move.l  %d2, %d0
+    movem.l (%sp)+, %d2-%d7
+    rts
+
+/* ---- u32 __servo_control(k, s, err_q16, omega_q16, dt_q32, settled) ---- */
+    .section .text.__servo_control, "ax"
+    .globl __servo_control
+__servo_control:
+    movem.l %d2-%d7/%a2-%a3, -(%sp) /* arguments now at 36, 40, 44, 48, 52, 56 */
+    movea.l 36(%sp), %a2        /* k */
+    movea.l 40(%sp), %a3        /* s */
+    move.l  44(%sp), %d2        /* err */
+    move.l  48(%sp), %d3        /* omega */
+    /* the proximate law: f from the linear line or the offset braking curve */
+    move.l  %d2, %d6
+    SATABS  %d6                 /* d = |err| */
+    moveq   #2, %d5             /* regime: linear */
+    cmp.l   E_YL(%a3), %d6
+    bgt     1f
+    move.l  %d2, %d0
+    MULSHR  %d0, K_SLOPE(%a2), 16, %d1, %d7, %d7
+    neg.l   %d0                 /* f = -mul_shr(err, slope, 16) */
+    bra     2f
+1:  moveq   #1, %d5             /* sliding */
+    move.l  E_TWOA(%a3), %d0
+    MULSHR  %d0, %d6, 16, %d1, %d7, %d7
+    move.l  %d0, -(%sp)
+    jsr     __fx_sqrt_q16
+    addq.l  #4, %sp
+    sub.l   E_C(%a3), %d0       /* v = sqrt(2A d) - c */
+    tst.l   %d2
+    ble     2f
+    neg.l   %d0                 /* err > 0: f = -v */
+2:  sub.l   %d3, %d0            /* f - omega, saturating */
+    SATV    %d0
+    MULSHR  %d0, K_B(%a2), 16, %d1, %d7, %d7
+    move.l  K_UMAX(%a2), %d1    /* u = clamp(arg, -umax, umax); saturated if it moved */
+    cmp.l   %d1, %d0
+    ble     3f
+    move.l  %d1, %d0
+    moveq   #0, %d5
+    bra     4f
+3:  neg.l   %d1
+    cmp.l   %d1, %d0
+    bge     4f
+    move.l  %d1, %d0
+    moveq   #0, %d5
+4:  move.l  %d0, %d4            /* u */
+    /* near_goal */
+    move.l  K_DEADBAND(%a2), %d6
+    tst.l   %d6                 /* (MOVE sets Z too; the image check wants the test) */
+    beq     8f                  /* no dead band: the law's torque as it is */
+    move.l  K_MOVING(%a2), %d0
+    cmp.l   %d0, %d3
+    bgt     5f                  /* turning +: dir = 1 */
+    neg.l   %d0
+    cmp.l   %d0, %d3
+    blt     6f                  /* turning -: dir = -1 */
+    move.l  %d2, %d1            /* at rest */
+    SATABS  %d1
+    cmp.l   %d6, %d1
+    bgt     7f
+    move.l  %d3, %d0            /* within the dead band: damping only */
+    MULSHR  %d0, K_B(%a2), 16, %d1, %d7, %d7
+    neg.l   %d0
+    move.l  %d0, %d4
+    bra     8f
+7:  move.l  %d4, %d0            /* dir = clamp(mul_shr(u, 10, 16), -1, 1) */
+    MULSHR  %d0, #(10 * ONE_Q16), 16, %d1, %d7, %d7
+    CLAMP   %d0, #ONE_Q16, %d1
+    bra     9f
+5:  move.l  #ONE_Q16, %d0
+    bra     9f
+6:  move.l  #-ONE_Q16, %d0
+9:  MULSHR  %d0, K_FRIC(%a2), 16, %d1, %d7, %d7
+    add.l   %d4, %d0            /* clamp(sat(u + friction), -umax, umax) */
+    SATV    %d0
+    CLAMP   %d0, K_UMAX(%a2), %d1
+    move.l  %d0, %d4
+8:  /* the notch: y = b0 (x + x2) + a1 (x1 - y1) - a2 y2 */
+    move.l  K_B0(%a2), %d0
+    tst.l   %d0
+    beq     10f
+    move.l  %d4, %d6
+    add.l   N_X2(%a3), %d6
+    MULSHR  %d0, %d6, 28, %d1, %d7, %d7
+    move.l  %d0, %d6
+    move.l  N_X1(%a3), %d0
+    sub.l   N_Y1(%a3), %d0
+    MULSHR  %d0, K_A1(%a2), 28, %d1, %d7, %d7
+    add.l   %d0, %d6
+    move.l  N_Y2(%a3), %d0
+    MULSHR  %d0, K_A2(%a2), 28, %d1, %d7, %d7
+    sub.l   %d0, %d6
+    move.l  N_X1(%a3), N_X2(%a3)
+    move.l  %d4, N_X1(%a3)
+    move.l  N_Y1(%a3), N_Y2(%a3)
+    move.l  %d6, N_Y1(%a3)
+    move.l  %d6, %d4
+10: /* the DAC code: clamp(mul_shr(u, dac_per_nm, 32), DAC_MIN, DAC_MAX) */
+    move.l  %d4, %d0
+    MULSHR  %d0, K_DAC_PER_NM(%a2), 32, %d1, %d7, %d7
+    cmpi.l  #DAC_MAX, %d0
+    ble     11f
+    move.l  #DAC_MAX, %d0
+11: cmpi.l  #DAC_MIN, %d0
+    bge     12f
+    move.l  #DAC_MIN, %d0
+12: move.l  %d0, %d6            /* code */
+    move.l  %d0, %d4
+    muls.l  K_NM_PER_DAC(%a2), %d4 /* the torque it makes (32-bit product) */
+    /* full torque the way the link turns, once the observers are settled */
+    tst.l   56(%sp)
+    beq     14f
+    tst.l   %d3
+    beq     14f
+    bmi     13f
+    cmpi.l  #DAC_MAX, %d6
+    bge     15f
+    bra     14f
+13: cmpi.l  #-DAC_MAX, %d6
+    ble     15f
+14: /* not accelerating (or no estimation): the estimate rests */
+    clr.b   E_ACTIVE(%a3)
+    bra     19f
+15: tst.l   K_ADAPT(%a2)
+    beq     14b
+    tst.b   E_ACTIVE(%a3)
+    bne     16f
+    move.b  #1, E_ACTIVE(%a3)   /* a new acceleration: the impulse starts */
+    clr.l   E_IMPULSE(%a3)
+    move.l  %d3, E_OMEGA0(%a3)
+    bra     19f
+16: move.l  52(%sp), %d2        /* impulse += mul_shr(prev torque, min(dt, MAX_DT), 32) */
+    cmpi.l  #MAX_DT_Q32, %d2
+    ble     17f
+    move.l  #MAX_DT_Q32, %d2
+17: move.l  S_TORQUE(%a3), %d0
+    MULSHR  %d0, %d2, 32, %d1, %d7, %d7
+    add.l   %d0, E_IMPULSE(%a3)
+    move.l  %d3, %d2            /* dw = omega - omega0 */
+    sub.l   E_OMEGA0(%a3), %d2
+    move.l  %d2, %d0
+    tst.l   %d0
+    bpl     18f
+    neg.l   %d0
+18: cmp.l   K_ADAPT(%a2), %d0
+    blt     19f                 /* |dw| below the threshold: not yet */
+    pea     31                  /* I = div_shl(2 impulse, dw, 31), Q32 */
+    move.l  %d2, -(%sp)
+    move.l  E_IMPULSE(%a3), %d0
+    add.l   %d0, %d0
+    move.l  %d0, -(%sp)
+    jsr     __fx_div
+    lea     12(%sp), %sp
+    cmp.l   K_ILO(%a2), %d0
+    blt     19f
+    cmp.l   K_IHI(%a2), %d0
+    bgt     19f
+    move.l  %d0, E_INERTIA(%a3) /* plausible: the curve follows it */
+    move.l  %d0, %d2
+    MULSHR  %d0, K_INV_2UHAT(%a2), 24, %d1, %d7, %d7
+    move.l  %d0, E_BRAKE(%a3)
+    move.l  %d2, %d0
+    asr.l   #2, %d0
+    pea     31                  /* 2 u^ / I = div_shl(u^, I >> 2, 31), Q16 */
+    move.l  %d0, -(%sp)
+    move.l  K_UHAT(%a2), -(%sp)
+    jsr     __fx_div
+    lea     12(%sp), %sp
+    move.l  %d0, E_TWOA(%a3)
+    move.l  %d0, %d2
+    MULSHR  %d0, K_YLPER(%a2), 32, %d1, %d7, %d7
+    move.l  %d0, E_YL(%a3)
+    move.l  %d2, %d0
+    MULSHR  %d0, K_CPER(%a2), 32, %d1, %d7, %d7
+    move.l  %d0, E_C(%a3)
+19: move.l  %d4, S_TORQUE(%a3)
+    move.l  %d5, %d0            /* regime << 16 | code */
+    swap    %d0
+    move.w  %d6, %d0
+    movem.l (%sp)+, %d2-%d7/%a2-%a3
+    rts
