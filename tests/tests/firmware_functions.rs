@@ -597,8 +597,9 @@ fn the_sensing_filter_matches_the_host_bit_for_bit() {
 
 /// The servo image's per-link routines (`__servo_observe`: the observer update and the
 /// arrest point; `__servo_control`: the proximate law, near-goal corrections, notch, DAC
-/// code and inertia estimate; the runtime's assembly) against `LinkState::observe_rust`
-/// and `LinkState::control_rust` on the host, both links, with the 3 kHz and the 750 Hz
+/// code and inertia estimate; the bodies of the two-link routines `Servo::step` calls, in
+/// the runtime's assembly) against `LinkState::observe` and `LinkState::control` on the
+/// host, both links, with the 3 kHz and the 750 Hz
 /// constants: a closed loop on a rigid link with random goal jumps, timer jitter (periods
 /// beyond the 10 ms bound too), encoder glitches (the observer's re-lock), the observers
 /// settled or not, and random extreme errors and speeds (saturation on every path). The
@@ -664,19 +665,19 @@ fn the_servo_link_routines_match_the_host_bit_for_bit() {
                 }
                 // Observe.
                 b.ram[oa..oa + 8].copy_from_slice(&layout::observer_be(&obs));
+                b.ram[sa..sa + layout::LINK_STATE_BYTES]
+                    .copy_from_slice(&layout::link_state_be(&st));
                 let before = obs;
-                let want = st.observe_rust(k, &mut obs, y, dt_q32);
+                let want = st.observe(k, &mut obs, y, dt_q32);
                 relocks += (obs.omega_q16 == 0 && before.omega_q16 != 0) as u32;
-                let args = [
-                    ka as u32,
-                    oa as u32,
-                    y as u32,
-                    st.torque_q16 as u32,
-                    dt_q32 as u32,
-                    st.est.brake_q32 as u32,
-                ];
+                let args = [ka as u32, oa as u32, sa as u32, y as u32, dt_q32 as u32];
                 let (got, _) = b.call(&mut g, fo, &args, 20_000).unwrap();
                 assert_eq!(got as i32, want, "link {li} step {step}: the arrest point");
+                assert_eq!(
+                    b.ram[sa..sa + layout::LINK_STATE_BYTES],
+                    layout::link_state_be(&st),
+                    "link {li} step {step}: the observer leaves the link's state alone"
+                );
                 assert_eq!(
                     b.ram[oa..oa + 8],
                     layout::observer_be(&obs),
@@ -695,7 +696,7 @@ fn the_servo_link_routines_match_the_host_bit_for_bit() {
                 b.ram[sa..sa + layout::LINK_STATE_BYTES]
                     .copy_from_slice(&layout::link_state_be(&st));
                 let inertia = st.est.inertia_q32;
-                let (code, r) = st.control_rust(k, err, w, dt_q32, settled);
+                let (code, r) = st.control(k, err, w, dt_q32, settled);
                 let args = [
                     ka as u32,
                     sa as u32,

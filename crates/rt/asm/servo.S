@@ -1,17 +1,12 @@
-/* The servo board's per-link control pass in 68020 assembly (crates/servo; thesis ch. III,
+/* The servo board's control pass of both links in 68020 assembly (crates/servo; thesis ch. III,
  * Appendix A; docs/servo.md "Fixed point on the 68020").
  *
  * Two routines, each bit-identical to the Rust it replaces on the image (the system test
  * tests/tests/firmware_functions.rs runs both against the host's code on random states):
- *
- *   i32 __servo_observe(const LinkConst *k, Observer *o, i32 y_q16, i32 u_q16, i32 dt_q32,
- *                       i32 brake_q32)
- *       = servo::LinkState::observe_rust: Observer::update, then the arrest point.
- *   u32 __servo_control(const LinkConst *k, LinkState *s, i32 err_q16, i32 omega_q16,
- *                       i32 dt_q32, u32 settled)
- *       = servo::LinkState::control_rust for the proximate law: the law, near_goal, the
- *         notch, the DAC code, the inertia estimate; returns the code in the low word and
- *         the regime (0 saturated, 1 sliding, 2 linear) in the high word.
+ * __servo_observe2 (per link: the angle from the count, servo::LinkState::observe, the
+ * arrest point) and __servo_control2 (per link: servo::LinkState::control for the proximate
+ * law: the law, near_goal, the notch, the DAC code, the inertia estimate). Servo::step
+ * calls each once a pass.
  *
  * The compiled pass took some 18,000 cycles for both links, a third of it in 41 calls of
  * __fx_mul_shr with its variable shift; here every product is a MULS.L with the shift
@@ -20,6 +15,7 @@
  * Structure offsets: servo::layout asserts the same numbers. */
 
     /* LinkConst */
+    .equ K_RPC, 0
     .equ K_INV_I, 4
     .equ K_UMAX, 8
     .equ K_INV_2UHAT, 32
@@ -59,6 +55,10 @@
     .equ N_Y1, 40
     .equ N_Y2, 44
     .equ S_TORQUE, 48
+    /* sizes of LinkConst, Observer, LinkState */
+    .equ LINK_CONST_BYTES, 132
+    .equ OBSERVER_BYTES, 8
+    .equ LINK_STATE_BYTES, 52
     /* servo::MAX_DT_Q32 (10 ms), regs::servo::DAC_MAX / DAC_MIN */
     .equ MAX_DT_Q32, 42949673
     .equ DAC_MAX, 2047
@@ -201,16 +201,75 @@ __fx_mul_shr\sh:
 .Lc2\@:
 .endm
 
-/* ---- i32 __servo_observe(k, o, y_q16, u_q16, dt_q32, brake_q32) ---- */
-    .section .text.__servo_observe, "ax"
+/* ---- the observer update and arrest point of both links ----
+ * void __servo_observe2(const LinkConst k[2], Observer o[2], const LinkState s[2],
+ *                       const i32 counts[2], i32 dt_q32, i32 out[4]): both links, the
+ *                       angle of each from its extended count first (the middle of the
+ *                       count: mul_shr(2 count + 1, rad_per_count, 17)); out = the two
+ *                       angles, then the two arrest points; per link
+ *                       servo::LinkState::observe (the torque that acted and the
+ *                       switching curve's brake come from s).
+ * The body per link: a0 = k, a1 = o, a2 = s, d2 = y, d3 = dt; d0 = the arrest point;
+ * d1-d7 clobbered. */
+    .section .text.__servo_observe2, "ax"
+    .globl __servo_observe2
+__servo_observe2:
+    movem.l %d2-%d7/%a2-%a3, -(%sp) /* arguments now at 36, 40, 44, 48, 52, 56 */
+    movea.l 48(%sp), %a3        /* counts */
+    movea.l 36(%sp), %a0        /* link 1 */
+    bsr     servo_angle
+    movea.l 56(%sp), %a1
+    move.l  %d2, (%a1)
+    movea.l 40(%sp), %a1
+    movea.l 44(%sp), %a2
+    move.l  52(%sp), %d3
+    bsr     servo_observe_body
+    movea.l 56(%sp), %a1
+    move.l  %d0, 8(%a1)
+    addq.l  #4, %a3             /* link 2 */
+    movea.l 36(%sp), %a0
+    lea     LINK_CONST_BYTES(%a0), %a0
+    bsr     servo_angle
+    movea.l 56(%sp), %a1
+    move.l  %d2, 4(%a1)
+    movea.l 40(%sp), %a1
+    addq.l  #OBSERVER_BYTES, %a1
+    movea.l 44(%sp), %a2
+    lea     LINK_STATE_BYTES(%a2), %a2
+    move.l  52(%sp), %d3
+    bsr     servo_observe_body
+    movea.l 56(%sp), %a1
+    move.l  %d0, 12(%a1)
+    movem.l (%sp)+, %d2-%d7/%a2-%a3
+    rts
+
+/* i32 __servo_observe(const LinkConst *k, Observer *o, const LinkState *s, i32 y_q16,
+ * i32 dt_q32): one link's body alone (servo::LinkState::observe), for the tests that run it
+ * against the host's on random states; in this section so that it stays linked with the
+ * routine the board calls. */
     .globl __servo_observe
 __servo_observe:
-    movem.l %d2-%d7, -(%sp)     /* arguments now at 28, 32, 36, 40, 44, 48 */
-    movea.l 28(%sp), %a0        /* k */
-    movea.l 32(%sp), %a1        /* o */
-    move.l  36(%sp), %d2        /* y */
-    move.l  44(%sp), %d3        /* dt = min(dt, MAX_DT) */
-    cmpi.l  #MAX_DT_Q32, %d3
+    movem.l %d2-%d7/%a2, -(%sp) /* arguments now at 32, 36, 40, 44, 48 */
+    movea.l 32(%sp), %a0
+    movea.l 36(%sp), %a1
+    movea.l 40(%sp), %a2
+    move.l  44(%sp), %d2
+    move.l  48(%sp), %d3
+    bsr     servo_observe_body
+    movem.l (%sp)+, %d2-%d7/%a2
+    rts
+
+/* d2 = mul_shr(2 (a3) + 1, k->rad_per_count, 17) for a0 = k (wrapping 2 n + 1, as the
+ * release build's); d1, d7 clobbered. */
+servo_angle:
+    move.l  (%a3), %d2
+    add.l   %d2, %d2
+    addq.l  #1, %d2
+    MULSHR  %d2, K_RPC(%a0), 17, %d1, %d7, %d7
+    rts
+
+servo_observe_body:
+    cmpi.l  #MAX_DT_Q32, %d3    /* dt = min(dt, MAX_DT) */
     ble     1f
     move.l  #MAX_DT_Q32, %d3
 1:  /* e = sat(y * 256) - theta24, saturating (Q24) */
@@ -230,7 +289,7 @@ __servo_observe:
     bgt     9f
     /* friction the law compensates: f the way the link turns; at rest clamp(u, -f, f) */
     move.l  O_OMEGA(%a1), %d5   /* omega */
-    move.l  40(%sp), %d6        /* u */
+    move.l  S_TORQUE(%a2), %d6  /* u: the torque that acted */
     move.l  K_FRIC(%a0), %d7
     move.l  K_MOVING(%a0), %d0
     cmp.l   %d0, %d5
@@ -273,12 +332,11 @@ __servo_observe:
     move.l  %d0, O_OMEGA(%a1)
     /* arrest = sat(y + mul_shr(mul_shr(omega, brake, 24), |omega|, 24)) */
     move.l  %d0, %d5
-    MULSHR  %d0, 48(%sp), 24, %d1, %d7, %d7
+    MULSHR  %d0, E_BRAKE(%a2), 24, %d1, %d7, %d7
     SATABS  %d5
     MULSHR  %d0, %d5, 24, %d1, %d7, %d7
     add.l   %d2, %d0
     SATV    %d0
-    movem.l (%sp)+, %d2-%d7
     rts
 9:  /* implausible: re-lock at rest on the measurement (theta24 = y << 8, wrapping);
      * the arrest point is then y */
@@ -287,18 +345,62 @@ __servo_observe:
     move.l  %d0, O_THETA(%a1)
     clr.l   O_OMEGA(%a1)
     move.l  %d2, %d0
-    movem.l (%sp)+, %d2-%d7
     rts
 
-/* ---- u32 __servo_control(k, s, err_q16, omega_q16, dt_q32, settled) ---- */
-    .section .text.__servo_control, "ax"
+/* ---- the law of both links ----
+ * void __servo_control2(const LinkConst k[2], LinkState s[2], const i32 err[2],
+ *                       const i32 omega[2], i32 dt_q32, u32 settled, u32 out[2]): both
+ *                       links, out[i] = regime << 16 | DAC code (regime 0 saturated,
+ *                       1 sliding, 2 linear); per link servo::LinkState::control for the
+ *                       proximate law.
+ * The body per link: a2 = k, a3 = s, d2 = err, d3 = omega, a4 = dt, a5 = settled;
+ * d0 = regime << 16 | code; d1-d7, a0, a1 clobbered. */
+    .section .text.__servo_control2, "ax"
+    .globl __servo_control2
+__servo_control2:
+    movem.l %d2-%d7/%a2-%a5, -(%sp) /* arguments now at 44, 48, 52, 56, 60, 64, 68 */
+    movea.l 44(%sp), %a2        /* link 1 */
+    movea.l 48(%sp), %a3
+    movea.l 52(%sp), %a0
+    move.l  (%a0), %d2
+    movea.l 56(%sp), %a0
+    move.l  (%a0), %d3
+    movea.l 60(%sp), %a4
+    movea.l 64(%sp), %a5
+    bsr     servo_control_body
+    movea.l 68(%sp), %a0
+    move.l  %d0, (%a0)
+    movea.l 44(%sp), %a2        /* link 2 */
+    lea     LINK_CONST_BYTES(%a2), %a2
+    movea.l 48(%sp), %a3
+    lea     LINK_STATE_BYTES(%a3), %a3
+    movea.l 52(%sp), %a0
+    move.l  4(%a0), %d2
+    movea.l 56(%sp), %a0
+    move.l  4(%a0), %d3
+    bsr     servo_control_body
+    movea.l 68(%sp), %a0
+    move.l  %d0, 4(%a0)
+    movem.l (%sp)+, %d2-%d7/%a2-%a5
+    rts
+
+/* u32 __servo_control(const LinkConst *k, LinkState *s, i32 err_q16, i32 omega_q16,
+ * i32 dt_q32, u32 settled): one link's body alone (servo::LinkState::control), for the
+ * tests; kept linked with __servo_control2 as __servo_observe is with __servo_observe2. */
     .globl __servo_control
 __servo_control:
-    movem.l %d2-%d7/%a2-%a3, -(%sp) /* arguments now at 36, 40, 44, 48, 52, 56 */
-    movea.l 36(%sp), %a2        /* k */
-    movea.l 40(%sp), %a3        /* s */
-    move.l  44(%sp), %d2        /* err */
-    move.l  48(%sp), %d3        /* omega */
+    movem.l %d2-%d7/%a2-%a5, -(%sp) /* arguments now at 44, 48, 52, 56, 60, 64 */
+    movea.l 44(%sp), %a2
+    movea.l 48(%sp), %a3
+    move.l  52(%sp), %d2
+    move.l  56(%sp), %d3
+    movea.l 60(%sp), %a4
+    movea.l 64(%sp), %a5
+    bsr     servo_control_body
+    movem.l (%sp)+, %d2-%d7/%a2-%a5
+    rts
+
+servo_control_body:
     /* the proximate law: f from the linear line or the offset braking curve */
     move.l  %d2, %d6
     SATABS  %d6                 /* d = |err| */
@@ -398,7 +500,7 @@ __servo_control:
     move.l  %d0, %d4
     muls.l  K_NM_PER_DAC(%a2), %d4 /* the torque it makes (32-bit product) */
     /* full torque the way the link turns, once the observers are settled */
-    tst.l   56(%sp)
+    cmpa.w  #0, %a5
     beq     14f
     tst.l   %d3
     beq     14f
@@ -419,7 +521,7 @@ __servo_control:
     clr.l   E_IMPULSE(%a3)
     move.l  %d3, E_OMEGA0(%a3)
     bra     19f
-16: move.l  52(%sp), %d2        /* impulse += mul_shr(prev torque, min(dt, MAX_DT), 32) */
+16: move.l  %a4, %d2            /* impulse += mul_shr(prev torque, min(dt, MAX_DT), 32) */
     cmpi.l  #MAX_DT_Q32, %d2
     ble     17f
     move.l  #MAX_DT_Q32, %d2
@@ -467,5 +569,4 @@ __servo_control:
     move.l  %d5, %d0            /* regime << 16 | code */
     swap    %d0
     move.w  %d6, %d0
-    movem.l (%sp)+, %d2-%d7/%a2-%a3
     rts

@@ -199,7 +199,7 @@ pub fn near_goal(k: &LinkConst, u_q16: i32, err_q16: i32, omega_q16: i32) -> i32
 }
 
 /// The notch at a link's first resonance, on the commanded torque (beyond the thesis).
-/// `repr(C)`: `__servo_control` keeps it ([`layout`]).
+/// `repr(C)`: `__servo_control2` keeps it ([`layout`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct Notch {
@@ -233,7 +233,7 @@ impl Notch {
 /// The on-line inertia estimate of one link (beyond the thesis): while the law accelerates
 /// the link at full torque, the impulse applied over the velocity gained is the inertia
 /// (friction makes it a little larger, the safe side for braking). It sets the switching
-/// curve's I / (2 u^). `repr(C)`: `__servo_control` keeps it ([`layout`]).
+/// curve's I / (2 u^). `repr(C)`: `__servo_control2` keeps it ([`layout`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C, align(4))]
 pub struct InertiaEstimate {
@@ -348,7 +348,7 @@ pub const OBSERVER_SETTLE_Q32: i32 = 128_849_019;
 /// The position estimate is kept in Q24 (2^-24 rad): in Q16 a velocity estimate below one
 /// LSB per period (0.005 rad/s at 3 kHz) moves the estimate by nothing, so a link at rest
 /// could keep a phantom velocity that the law then damps against, holding torque forever.
-/// `repr(C)`: `__servo_observe` updates it ([`layout`]).
+/// `repr(C)`: `__servo_observe2` updates it ([`layout`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct Observer {
@@ -412,8 +412,19 @@ impl Observer {
     }
 }
 
+/// The regime the assembly's code `r` stands for (0 saturated, 1 sliding, 2 linear).
+#[cfg(target_arch = "m68k")]
+#[inline(always)]
+fn regime_of(r: u32) -> Regime {
+    match r {
+        0 => Regime::Saturated,
+        1 => Regime::Sliding,
+        _ => Regime::Linear,
+    }
+}
+
 /// One link's control state between passes: the inertia estimate, the notch and the torque
-/// last commanded. `repr(C)`: `__servo_control` keeps it on the 68020 ([`layout`]).
+/// last commanded. `repr(C)`: `__servo_control2` keeps it on the 68020 ([`layout`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C, align(4))]
 pub struct LinkState {
@@ -441,35 +452,10 @@ impl LinkState {
     }
 
     /// Updates observer `obs` with the measured angle `y_q16` over `dt_q32` (the torque last
-    /// commanded acted over it) and returns the arrest point from `y_q16` and the new
-    /// velocity estimate. One call of `__servo_observe` on the 68020; [`Self::observe_rust`]
-    /// elsewhere (the reference that routine is tested against).
-    #[inline]
+    /// commanded acted over it): [`Observer::update`]; returns the arrest point from
+    /// `y_q16` and the new velocity estimate ([`arrest_point`]). On the 68020,
+    /// [`Servo::step`] runs this for both links in one call of `__servo_observe2`.
     pub fn observe(&self, k: &LinkConst, obs: &mut Observer, y_q16: i32, dt_q32: i32) -> i32 {
-        #[cfg(target_arch = "m68k")]
-        {
-            extern "C" {
-                fn __servo_observe(
-                    k: *const LinkConst,
-                    obs: *mut Observer,
-                    y_q16: i32,
-                    u_q16: i32,
-                    dt_q32: i32,
-                    brake_q32: i32,
-                ) -> i32;
-            }
-            // SAFETY: the routine reads `k` and updates `obs` only, at the offsets `layout`
-            // asserts.
-            unsafe { __servo_observe(k, obs, y_q16, self.torque_q16, dt_q32, self.est.brake_q32) }
-        }
-        #[cfg(not(target_arch = "m68k"))]
-        {
-            self.observe_rust(k, obs, y_q16, dt_q32)
-        }
-    }
-
-    /// [`Self::observe`] in Rust: [`Observer::update`] then [`arrest_point`].
-    pub fn observe_rust(&self, k: &LinkConst, obs: &mut Observer, y_q16: i32, dt_q32: i32) -> i32 {
         obs.update(k, y_q16, self.torque_q16, dt_q32);
         arrest_point(self.est.brake_q32, y_q16, obs.omega_q16)
     }
@@ -478,44 +464,9 @@ impl LinkState {
     /// ([`proximate_law`] or [`law`]), [`near_goal`], the notch, the DAC code; then the
     /// inertia estimate (while `settled`, the observers locked) and the torque the code
     /// makes (`torque_q16`, for the observer's next update). Returns the code and the
-    /// regime. One call of `__servo_control` on the 68020 for the proximate law;
-    /// [`Self::control_rust`] elsewhere (the reference that routine is tested against).
-    #[inline]
+    /// regime. On the 68020, [`Servo::step`] runs this for both links in one call of
+    /// `__servo_control2` (for the proximate law).
     pub fn control(
-        &mut self,
-        k: &LinkConst,
-        err_q16: i32,
-        omega_q16: i32,
-        dt_q32: i32,
-        settled: bool,
-    ) -> (i16, Regime) {
-        #[cfg(target_arch = "m68k")]
-        if k.proximate {
-            extern "C" {
-                fn __servo_control(
-                    k: *const LinkConst,
-                    s: *mut LinkState,
-                    err_q16: i32,
-                    omega_q16: i32,
-                    dt_q32: i32,
-                    settled: u32,
-                ) -> u32;
-            }
-            // SAFETY: the routine reads `k` and updates `self` only, at the offsets `layout`
-            // asserts.
-            let r = unsafe { __servo_control(k, self, err_q16, omega_q16, dt_q32, settled as u32) };
-            let regime = match r >> 16 {
-                0 => Regime::Saturated,
-                1 => Regime::Sliding,
-                _ => Regime::Linear,
-            };
-            return (r as u16 as i16, regime);
-        }
-        self.control_rust(k, err_q16, omega_q16, dt_q32, settled)
-    }
-
-    /// [`Self::control`] in Rust.
-    pub fn control_rust(
         &mut self,
         k: &LinkConst,
         err_q16: i32,
@@ -548,8 +499,8 @@ impl LinkState {
     }
 }
 
-/// Byte offsets of the structures the servo image's assembly (`__servo_observe`,
-/// `__servo_control` in `crates/rt/asm/rt.S`) reads and writes; the assembly names the
+/// Byte offsets of the structures the servo image's assembly (`__servo_observe2`,
+/// `__servo_control2` in `crates/rt/asm/servo.S`) reads and writes; the assembly names the
 /// same numbers.
 pub mod layout {
     use super::{InertiaEstimate, LinkConst, LinkState, Notch, Observer};
@@ -819,34 +770,16 @@ impl Servo {
         let c1 =
             self.counts[1].wrapping_add(input.enc[1].wrapping_sub(self.last_enc[1]) as i16 as i32);
         let (ticks, dt_q32) = self.take_counts(input, [c0, c1]);
-        let theta = [self.angle(0), self.angle(1)];
         // The observers start at rest: until they have locked onto a link that was already
         // moving, the velocity they report is not the torque's doing.
         let settled = self.observers_settled(dt_q32);
-        let [l0, l1] = &mut self.law;
-        let [o0, o1] = &mut self.obs;
-        let arrest = [
-            l0.observe(&self.links[0], o0, theta[0], dt_q32),
-            l1.observe(&self.links[1], o1, theta[1], dt_q32),
-        ];
-        let omega = [o0.omega_q16, o1.omega_q16];
+        let (theta, arrest) = self.observe_both(dt_q32);
+        let omega = [self.obs[0].omega_q16, self.obs[1].omega_q16];
         // The goal: the subgoal while it is fresh and plausible, else hold at the arrest point.
         let (goal, new_fault) = self.log_and_choose_goal(input.subgoal, dt_q32, arrest, false);
-        let [l0, l1] = &mut self.law;
-        let (d0, r0) = l0.control(
-            &self.links[0],
-            theta[0] - goal[0],
-            omega[0],
-            dt_q32,
-            settled,
-        );
-        let (d1, r1) = l1.control(
-            &self.links[1],
-            theta[1] - goal[1],
-            omega[1],
-            dt_q32,
-            settled,
-        );
+        let err = [theta[0] - goal[0], theta[1] - goal[1]];
+        let ([d0, d1], [r0, r1]) = self.control_both(err, omega, dt_q32, settled);
+        let [l0, l1] = &self.law;
         Output {
             dac: [d0, d1],
             enable: true,
@@ -893,6 +826,98 @@ impl Servo {
             new_fault,
             regime: [Regime::Linear; 2],
         }
+    }
+
+    /// Both links' angles (from the extended counts) and, after their observers' update,
+    /// their arrest points: one call of `__servo_observe2` on the 68020.
+    #[inline(always)]
+    fn observe_both(&mut self, dt_q32: i32) -> ([i32; 2], [i32; 2]) {
+        #[cfg(target_arch = "m68k")]
+        {
+            extern "C" {
+                fn __servo_observe2(
+                    k: *const LinkConst,
+                    obs: *mut Observer,
+                    s: *const LinkState,
+                    counts: *const i32,
+                    dt_q32: i32,
+                    out: *mut [i32; 4],
+                );
+            }
+            let mut out = [0i32; 4];
+            // SAFETY: the routine reads both links' constants, states and counts, updates
+            // both observers and writes `out`, at the offsets `layout` asserts.
+            unsafe {
+                __servo_observe2(
+                    self.links.as_ptr(),
+                    self.obs.as_mut_ptr(),
+                    self.law.as_ptr(),
+                    self.counts.as_ptr(),
+                    dt_q32,
+                    &mut out,
+                )
+            };
+            ([out[0], out[1]], [out[2], out[3]])
+        }
+        #[cfg(not(target_arch = "m68k"))]
+        {
+            let theta = [self.angle(0), self.angle(1)];
+            let [l0, l1] = &self.law;
+            let [o0, o1] = &mut self.obs;
+            let arrest = [
+                l0.observe(&self.links[0], o0, theta[0], dt_q32),
+                l1.observe(&self.links[1], o1, theta[1], dt_q32),
+            ];
+            (theta, arrest)
+        }
+    }
+
+    /// [`LinkState::control`] of both links: one call of `__servo_control2` on the 68020
+    /// (the proximate law's constants; the others run the Rust).
+    #[inline(always)]
+    fn control_both(
+        &mut self,
+        err: [i32; 2],
+        omega: [i32; 2],
+        dt_q32: i32,
+        settled: bool,
+    ) -> ([i16; 2], [Regime; 2]) {
+        #[cfg(target_arch = "m68k")]
+        if self.links[0].proximate && self.links[1].proximate {
+            extern "C" {
+                fn __servo_control2(
+                    k: *const LinkConst,
+                    s: *mut LinkState,
+                    err: *const i32,
+                    omega: *const i32,
+                    dt_q32: i32,
+                    settled: u32,
+                    out: *mut [u32; 2],
+                );
+            }
+            let mut out = [0u32; 2];
+            // SAFETY: the routine reads both links' constants, errors and speeds, updates
+            // both states and writes `out`, at the offsets `layout` asserts.
+            unsafe {
+                __servo_control2(
+                    self.links.as_ptr(),
+                    self.law.as_mut_ptr(),
+                    err.as_ptr(),
+                    omega.as_ptr(),
+                    dt_q32,
+                    settled as u32,
+                    &mut out,
+                )
+            };
+            return (
+                [out[0] as u16 as i16, out[1] as u16 as i16],
+                [regime_of(out[0] >> 16), regime_of(out[1] >> 16)],
+            );
+        }
+        let [l0, l1] = &mut self.law;
+        let (d0, r0) = l0.control(&self.links[0], err[0], omega[0], dt_q32, settled);
+        let (d1, r1) = l1.control(&self.links[1], err[1], omega[1], dt_q32, settled);
+        ([d0, d1], [r0, r1])
     }
 
     /// Keeps this pass's extended counts and encoder latches and the timer; returns the

@@ -182,7 +182,7 @@ const DAC_FS_V: f64 = regs::servo::DAC_FULL_SCALE_MV as f64 / 1000.0;
 pub const TIMER_TICK_Q40: i32 = fit(round(Q32 * 256.0 / regs::servo::TIMER_HZ as f64));
 
 /// The fixed-point constants of one link. `repr(C)`: the servo image's assembly
-/// (`__servo_observe`, `__servo_control` in `crates/rt/asm/rt.S`) reads them at the offsets
+/// (`__servo_observe2`, `__servo_control2` in `crates/rt/asm/servo.S`) reads them at the offsets
 /// [`crate::layout`] asserts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C, align(4))]
@@ -351,28 +351,19 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
     ]
 }
 
-/// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz
-/// (`sim-host profile servo` measures it; docs/servo.md).
-pub const IMAGE_HZ: f64 = 750.0;
+/// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: a
+/// pass of the image takes 9,000-11,000 cycles of the 11,133 a 1,500 Hz period has at
+/// 16.7 MHz (`sim-host profile servo`, and `loop_max_us` of an image run; docs/servo.md).
+pub const IMAGE_HZ: f64 = 1500.0;
 
-/// Near-goal frequencies of the tuned law at [`IMAGE_HZ`], Hz: at 750 Hz the 45 Hz loop of
-/// [`TUNED_NEAR_HZ`] limit-cycles through the band resonance; these were the stiffest stable
-/// ones in the bench's sweep at that rate.
-pub const IMAGE_NEAR_HZ: [f64; 2] = [12.0, 5.3];
-
-/// The tuned law with observer gains, notch and near-goal loop designed for [`IMAGE_HZ`]:
-/// what the servo image runs today.
+/// The tuned law with the observer gains and notch designed for [`IMAGE_HZ`]: what the
+/// servo image runs today. The near-goal loop is [`TUNED`]'s ([`TUNED_NEAR_HZ`]): at
+/// 1,500 Hz it is stable (at 750 Hz, the previous image rate, it limit-cycled through the
+/// band resonance and needed 12 Hz / 5.3 Hz), and the softer loops leave link 2 held by
+/// friction counts off its goal (docs/servo.md has the sweep).
 pub static TUNED_AT_IMAGE_HZ: [LinkConst; 2] = [
-    link_const_at(
-        &LINK1,
-        &tuned(&LINK1, TUNED_UHAT_FRACTION, IMAGE_NEAR_HZ[0], 4.0),
-        1.0 / IMAGE_HZ,
-    ),
-    link_const_at(
-        &LINK2,
-        &tuned(&LINK2, TUNED_UHAT_FRACTION, IMAGE_NEAR_HZ[1], 4.0),
-        1.0 / IMAGE_HZ,
-    ),
+    link_const_at(&LINK1, &LINK1_TUNED, 1.0 / IMAGE_HZ),
+    link_const_at(&LINK2, &LINK2_TUNED, 1.0 / IMAGE_HZ),
 ];
 
 /// The thesis's law: both links' constants.
