@@ -87,7 +87,7 @@ macro_rules! record {
         impl $name {
             /// The record's words in order, as [`$crate::record::SeqLock::publish_raw`]
             /// writes them (no dynamic calls, unlike [`$crate::record::Record::encode`]).
-            pub fn to_words(&self) -> [u32; <Self as $crate::record::Record>::WORDS as usize] {
+            pub fn to_words(self) -> [u32; <Self as $crate::record::Record>::WORDS as usize] {
                 [$($crate::record::Word::to_word(self.$field)),+]
             }
 
@@ -347,6 +347,23 @@ mod tests {
         slot.publish_words(&mut bus, 2, &[7, 99]);
         assert_eq!(slot.read(&mut bus).unwrap().0.c, 7);
         assert_eq!(bus.read_u32(8 + 4 * 4), 0);
+    }
+
+    /// The words `to_words` gives are `encode`'s, and `from_words` inverts both; the word
+    /// index of a field is its place in the record.
+    #[test]
+    fn words_match_the_encoding_and_round_trip() {
+        let p = Pair {
+            a: 7,
+            b: -9,
+            c: 0x8000_0001,
+        };
+        let mut enc = [0u32; 3];
+        p.encode(&mut |i, w| enc[i as usize] = w);
+        assert_eq!(p.to_words(), enc);
+        assert_eq!(Pair::from_words(&enc), p);
+        assert_eq!(word_index(Pair::FIELDS, "c"), 2);
+        assert_eq!(word_index(Pair::FIELDS, "a"), 0);
     }
 
     #[test]
