@@ -288,6 +288,16 @@ fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
     for _ in 0..3000 {
         cases.push(rng.next_u64() as i32 >> (rng.next_u64() % 32));
     }
+    // Around perfect squares (where a root one off shows), and every top byte of the
+    // shifted input (the table-seeded path).
+    for k in (1..46341i32).step_by(37) {
+        cases.extend([k * k - 1, k * k, k * k + 1]);
+    }
+    for b in 0..256u32 {
+        for low in [0u32, 0x7F_FFFF, 0xFF_FFFF] {
+            cases.push(((b << 24 | low) >> 1) as i32);
+        }
+    }
     for x in cases {
         assert_eq!(f(&[x]), servo::fx::host_sqrt_q16(x), "sqrt_q16({x})");
     }
