@@ -721,7 +721,7 @@ __sense_filter:
     moveq   #0, %d7                 /* filling: window < (adaptive ? LONG : SHORT) */
     tst.l   44(%sp)
     beq.s   32f
-    cmpi.w  #32, F_MOVED(%a0)
+    cmpi.w  #128, F_MOVED(%a0)      /* sensing::filter::MOVING_HOLD */
     scs     %d6
     cmpi.l  #256, %d5
     scs     %d7

@@ -16,6 +16,17 @@ pub const LONG: usize = 256;
 pub const SHORT: usize = 32;
 /// Fewest samples behind a published valid position (16 ms after (re)acquisition).
 pub const MIN_VALID: u16 = 8;
+/// Samples the moving flag is held after the last movement found (0.26 s at 500 Hz). The
+/// movement check fires again only once the short mean has left the mean since the last
+/// detection by the threshold, so a beacon in steady motion is found moving only every so
+/// often; held for [`SHORT`] samples alone, the flag lapsed in between, the beacon was
+/// published from the long window up to 12 mm behind and the C-space board drew it unswept
+/// (docs/reflex.md). Measured by `sim-host campaign reflex --moving 500 --seed 1`: scenes
+/// with collisions 45 at 32 samples, 31 at 64, 27 at 96, 128, 192 and 256.
+pub const MOVING_HOLD: u16 = 128;
+/// Where `moved` starts in a fresh or reset filter: flagged moving for its first
+/// [`SHORT`] samples.
+const MOVED_FRESH: u16 = MOVING_HOLD - SHORT as u16;
 /// The movement threshold on |mean(short) - mean(since rest)|, Q5 codes.
 pub const MOVE_Q5: i32 = 28 << 5;
 
@@ -65,7 +76,8 @@ pub struct Estimate {
     pub q5: [i32; 2],
     /// Samples averaged (saturating at 255).
     pub samples: u16,
-    /// The beacon moved within the last [`SHORT`] samples: the short window is in use.
+    /// The beacon moved within the last [`MOVING_HOLD`] samples (a fresh filter: its first
+    /// [`SHORT`]).
     pub moving: bool,
     /// Fewer samples than the window in use can hold.
     pub filling: bool,
@@ -97,7 +109,7 @@ impl Filter {
             next: 0,
             count: 0,
             since: 0,
-            moved: 0,
+            moved: MOVED_FRESH,
         }
     }
 
@@ -110,7 +122,7 @@ impl Filter {
         }
         self.count = 0;
         self.since = 0;
-        self.moved = 0;
+        self.moved = MOVED_FRESH;
     }
 
     /// The filter as the 68020 holds it in memory (`repr(C)`, big-endian): for the tests
@@ -234,7 +246,7 @@ impl Filter {
         Some(Estimate {
             q5,
             samples: window.min(255),
-            moving: adaptive && (self.moved as usize) < SHORT,
+            moving: adaptive && self.moved < MOVING_HOLD,
             filling: if adaptive {
                 (window as usize) < LONG
             } else {
