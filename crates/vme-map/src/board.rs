@@ -369,6 +369,17 @@ mod tests {
         assert_eq!(st.state(), Some(BoardState::Running));
     }
 
+    /// Publishes host command `command` for board `to` with serial `serial`.
+    fn send(bus: &mut ArrayBus, command: u32, to: BoardId, serial: u32) {
+        let cmd = HostCommand {
+            command,
+            arg0: to.index(),
+            arg1: 0,
+            serial,
+        };
+        HOST_COMMAND.publish(bus, &cmd);
+    }
+
     #[test]
     fn host_commands_reach_only_their_board_once() {
         let mut mem = [0u8; 0x1000];
@@ -377,13 +388,7 @@ mod tests {
         let mut servo = Lifecycle::new(BoardId::Servo);
         let mut reflex = Lifecycle::new(BoardId::Reflex);
         assert!(servo.boot(&mut bus) && reflex.boot(&mut bus));
-        let cmd = HostCommand {
-            command: host_cmd::INJECT_PANIC,
-            arg0: 1,
-            arg1: 0,
-            serial: 1,
-        };
-        HOST_COMMAND.publish(&mut bus, &cmd);
+        send(&mut bus, host_cmd::INJECT_PANIC, BoardId::Servo, 1);
         assert_eq!(reflex.poll_host(&mut bus), None);
         assert_eq!(servo.poll_host(&mut bus), Some(HostAction::InjectPanic));
         assert_eq!(servo.poll_host(&mut bus), None);
@@ -398,13 +403,7 @@ mod tests {
         init_header(&mut bus);
         let mut servo = Lifecycle::new(BoardId::Servo);
         assert!(servo.boot(&mut bus));
-        let cmd = HostCommand {
-            command: host_cmd::INJECT_BUS_ERROR,
-            arg0: 1,
-            arg1: 0,
-            serial: 7,
-        };
-        HOST_COMMAND.publish(&mut bus, &cmd);
+        send(&mut bus, host_cmd::INJECT_BUS_ERROR, BoardId::Servo, 7);
         let seq = bus.read_u32(HOST_COMMAND.offset());
         bus.write_u32(HOST_COMMAND.offset(), seq | 1);
         assert_eq!(servo.poll_host(&mut bus), None);
