@@ -1,8 +1,10 @@
 /* The servo board's control pass of both links in 68020 assembly (crates/servo; thesis ch. III,
  * Appendix A; docs/servo.md "Fixed point on the 68020").
  *
- * Two routines, each bit-identical to the Rust it replaces on the image (the system test
- * tests/tests/firmware_functions.rs runs both against the host's code on random states):
+ * Two routines, each bit-identical to the Rust it replaces on the image (the system tests in
+ * tests/tests/firmware_functions.rs run their per-link bodies, __servo_observe and
+ * __servo_control, against the host's code on random states, and the image's whole
+ * Servo::step against the host's):
  * __servo_observe2 (per link: the angle from the count, servo::LinkState::observe, the
  * arrest point) and __servo_control2 (per link: servo::LinkState::control for the proximate
  * law: the law, near_goal, the notch, the DAC code, the inertia estimate). Servo::step
@@ -11,6 +13,8 @@
  * The compiled pass took some 18,000 cycles for both links, a third of it in 41 calls of
  * __fx_mul_shr with its variable shift; here every product is a MULS.L with the shift
  * fixed by a macro, and the state stays in registers.
+ *
+ * Also here: the fixed-shift multiplies __fx_mul_shrN that fx::mul_shr calls in every image.
  *
  * Structure offsets: servo::layout asserts the same numbers. */
 
