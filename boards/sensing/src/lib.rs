@@ -103,13 +103,10 @@ impl Board {
             // The record's words in one call (the word-by-word read cost 1,400 cycles).
             let mut w =
                 [0u32; <vme_map::records::ServoState as vme_map::record::Record>::WORDS as usize];
-            match vme_map::SERVO_STATE.read_raw(g, &mut w).map(|seq| {
-                let s =
-                    <vme_map::records::ServoState as vme_map::record::Record>::decode(&mut |i| {
-                        w[i as usize]
-                    });
-                (s, seq)
-            }) {
+            match vme_map::SERVO_STATE
+                .read_raw(g, &mut w)
+                .map(|seq| (vme_map::records::ServoState::from_words(&w), seq))
+            {
                 Ok((s, seq)) if seq != 0 => Some(ServoView {
                     theta_urad: [s.theta1_urad, s.theta2_urad],
                     loops: s.loops,

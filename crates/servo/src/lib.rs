@@ -105,9 +105,18 @@ pub fn law(k: &LinkConst, brake_q32: i32, err_q16: i32, omega_q16: i32) -> (i32,
 /// (u^ eps / s_sat, u^ / omega_sat); `two_a_q16` is 2 u^ / I with the estimated inertia.
 #[inline(never)]
 pub fn proximate_law(k: &LinkConst, two_a_q16: i32, err_q16: i32, omega_q16: i32) -> (i32, Regime) {
-    let yl = mul_shr(two_a_q16, k.yl_per_two_a_q32, 32);
-    let c = mul_shr(two_a_q16, k.c_per_two_a_q32, 32);
+    let (yl, c) = curve_offsets(k, two_a_q16);
     proximate_law_with(k, two_a_q16, yl, c, err_q16, omega_q16)
+}
+
+/// The proximate law's y_l and c (Q16) for 2 u^ / I = `two_a_q16`; [`InertiaEstimate`]
+/// keeps them beside its `two_a_q16`. (The constants' prior curve has them computed at
+/// compile time in [`params::LinkConst`].)
+fn curve_offsets(k: &LinkConst, two_a_q16: i32) -> (i32, i32) {
+    (
+        mul_shr(two_a_q16, k.yl_per_two_a_q32, 32),
+        mul_shr(two_a_q16, k.c_per_two_a_q32, 32),
+    )
 }
 
 /// [`proximate_law`] with its y_l and c for `two_a_q16` given (as [`InertiaEstimate`] keeps
@@ -305,8 +314,7 @@ impl InertiaEstimate {
             self.brake_q32 = mul_shr(i, k.inv_two_uhat_q24, 24);
             // (u^ 2^16 2^31) / (I 2^30) = 2 u^ / I in Q16.
             self.two_a_q16 = div_shl(k.uhat_q16, i >> 2, 31);
-            self.yl_q16 = mul_shr(self.two_a_q16, k.yl_per_two_a_q32, 32);
-            self.c_q16 = mul_shr(self.two_a_q16, k.c_per_two_a_q32, 32);
+            (self.yl_q16, self.c_q16) = curve_offsets(k, self.two_a_q16);
         }
     }
 }

@@ -347,8 +347,8 @@ impl Lifecycle {
 mod tests {
     use super::*;
     use crate::bus::{ArrayBus, GlobalBus};
-    use crate::layout::{init_header, BoardSlot, HOST_COMMAND};
-    use crate::records::{host_cmd, HostCommand};
+    use crate::layout::{init_header, post_host_command, BoardSlot, HOST_COMMAND};
+    use crate::records::host_cmd;
 
     #[test]
     fn boot_waits_for_the_header_and_records_the_mismatch_once() {
@@ -369,17 +369,6 @@ mod tests {
         assert_eq!(st.state(), Some(BoardState::Running));
     }
 
-    /// Publishes host command `command` for board `to` with serial `serial`.
-    fn send(bus: &mut ArrayBus, command: u32, to: BoardId, serial: u32) {
-        let cmd = HostCommand {
-            command,
-            arg0: to.index(),
-            arg1: 0,
-            serial,
-        };
-        HOST_COMMAND.publish(bus, &cmd);
-    }
-
     #[test]
     fn host_commands_reach_only_their_board_once() {
         let mut mem = [0u8; 0x1000];
@@ -388,7 +377,7 @@ mod tests {
         let mut servo = Lifecycle::new(BoardId::Servo);
         let mut reflex = Lifecycle::new(BoardId::Reflex);
         assert!(servo.boot(&mut bus) && reflex.boot(&mut bus));
-        send(&mut bus, host_cmd::INJECT_PANIC, BoardId::Servo, 1);
+        post_host_command(&mut bus, host_cmd::INJECT_PANIC, BoardId::Servo);
         assert_eq!(reflex.poll_host(&mut bus), None);
         assert_eq!(servo.poll_host(&mut bus), Some(HostAction::InjectPanic));
         assert_eq!(servo.poll_host(&mut bus), None);
@@ -403,7 +392,7 @@ mod tests {
         init_header(&mut bus);
         let mut servo = Lifecycle::new(BoardId::Servo);
         assert!(servo.boot(&mut bus));
-        send(&mut bus, host_cmd::INJECT_BUS_ERROR, BoardId::Servo, 7);
+        post_host_command(&mut bus, host_cmd::INJECT_BUS_ERROR, BoardId::Servo);
         let seq = bus.read_u32(HOST_COMMAND.offset());
         bus.write_u32(HOST_COMMAND.offset(), seq | 1);
         assert_eq!(servo.poll_host(&mut bus), None);
