@@ -725,3 +725,122 @@ fn the_servo_link_routines_match_the_host_bit_for_bit() {
     assert!(estimates > 20, "{estimates} inertia estimates accepted");
     assert!(deadband > 1000, "{deadband} passes at rest near the goal");
 }
+
+/// The sensing board's calibrated position (`__sense_locate`, the runtime's assembly: drift
+/// correction, the inverse grid's bilinear blend, the calibrated area's test) against
+/// `sensing::locate_um` on the host: random grids (nodes over the whole +-`MAX_NODE_UM`
+/// range, so differences reach 2^21), signals beyond both ends of the grid (the clamps),
+/// random drift estimates within their bounds or none, random areas; the position and the
+/// outside flag must be identical.
+#[test]
+fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
+    use sensing::cal::CalWords;
+    use sensing::drift::{Drift, MAX_GAIN_Q24, MAX_OFFSET_Q5};
+    use vme_map::records::cal::{INV, INV_N, MAX_NODE_UM};
+    /// The table's inverse grid alone (the lookup reads no other word).
+    struct Inv(Vec<u32>);
+    impl CalWords for Inv {
+        fn word(&mut self, i: u32) -> u32 {
+            self.0[(i - INV) as usize]
+        }
+    }
+    let (mut b, img, mut g) = board_of(BoardId::Sensing);
+    let f = img
+        .symbol("__sense_locate")
+        .expect("__sense_locate in the sensing image");
+    let (inv_at, drift_at, area_at, out_at) = (BUF, BUF + 0x10000, BUF + 0x10100, BUF + 0x10200);
+    let mut rng = sim_host::sim::Rng::new(47);
+    let mut r = move |n: i64| (rng.next_u64() % (2 * n as u64 + 1)) as i64 - n;
+    let words = (2 * INV_N * INV_N) as usize;
+    let put = |ram: &mut [u8], at: u32, v: i32| {
+        ram[at as usize..at as usize + 4].copy_from_slice(&v.to_be_bytes())
+    };
+    let (mut outside, mut clamped, mut corrected, mut edges) = (0, 0, 0, 0);
+    for table in 0..6 {
+        // Smooth grids (a scale and an offset per axis) with noise, and pure noise.
+        let smooth = table % 2 == 0;
+        let mut inv = Inv(vec![0; words]);
+        for k in 0..words {
+            let v = if smooth {
+                let (i, j) = ((k / 2) as i64 % INV_N as i64, (k / 2) as i64 / INV_N as i64);
+                let c = if k % 2 == 0 { i } else { j };
+                (c - 32) * 15_000 + r(3_000)
+            } else {
+                r(MAX_NODE_UM as i64)
+            };
+            inv.0[k] = v as i32 as u32;
+            put(&mut b.ram, inv_at + 4 * k as u32, v as i32);
+        }
+        for _ in 0..3_000 {
+            let span = if r(4) == 0 { 1 << 18 } else { 70_000 };
+            let v = [r(span) as i32, r(span) as i32];
+            let drift = Drift {
+                o_q13: [
+                    r((MAX_OFFSET_Q5 << 8) as i64) as i32,
+                    r((MAX_OFFSET_Q5 << 8) as i64) as i32,
+                ],
+                g_q24: [r(MAX_GAIN_Q24 as i64) as i32, r(MAX_GAIN_Q24 as i64) as i32],
+                observations: 1,
+            };
+            let correct = (r(1) == 0) as u32;
+            let mut area = [
+                r(400_000) as i32 - 300_000,
+                r(400_000) as i32 + 300_000,
+                r(400_000) as i32 - 300_000,
+                r(400_000) as i32 + 300_000,
+            ];
+            if r(1) == 0 {
+                // One side within a micrometre of its margin's edge.
+                let (p, _) = sensing::locate_um(&mut inv, v, &drift, correct, &area);
+                let m = sensing::AREA_MARGIN_UM;
+                let side = (r(2) + 2) as usize % 4;
+                let d = r(1) as i32;
+                area[side] = match side {
+                    0 => p[0] + m + d,
+                    1 => p[0] - m + d,
+                    2 => p[1] + m + d,
+                    _ => p[1] - m + d,
+                };
+                edges += 1;
+            }
+            let want = sensing::locate_um(&mut inv, v, &drift, correct, &area);
+            for (n, w) in drift.o_q13.iter().chain(&drift.g_q24).enumerate() {
+                put(&mut b.ram, drift_at + 4 * n as u32, *w);
+            }
+            for (n, w) in area.iter().enumerate() {
+                put(&mut b.ram, area_at + 4 * n as u32, *w);
+            }
+            let (got, _) = b
+                .call(
+                    &mut g,
+                    f,
+                    &[
+                        inv_at,
+                        v[0] as u32,
+                        v[1] as u32,
+                        if correct != 0 { drift_at } else { 0 },
+                        area_at,
+                        out_at,
+                    ],
+                    5_000,
+                )
+                .unwrap();
+            let word = |o: u32| {
+                i32::from_be_bytes(b.ram[(out_at + o) as usize..][..4].try_into().unwrap())
+            };
+            assert_eq!(
+                ([word(0), word(4)], got),
+                want,
+                "table {table}, signals {v:?}, drift {drift:?} ({correct}), area {area:?}"
+            );
+            outside += want.1;
+            clamped += v.iter().any(|&s| s.abs() > 1 << 16) as u32;
+            corrected += correct;
+        }
+    }
+    // The cases were all met: outside and inside, clamped signals, with and without drift.
+    assert!((2_000..16_000).contains(&outside), "{outside} outside");
+    assert!(clamped > 2_000, "{clamped} clamped");
+    assert!(corrected > 5_000, "{corrected} corrected");
+    assert!(edges > 5_000, "{edges} at an edge");
+}

@@ -31,6 +31,10 @@ impl<G: GlobalBus> CalWords for GlobalCal<'_, G> {
     fn word(&mut self, i: u32) -> u32 {
         self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
     }
+    #[inline(always)]
+    fn base(&mut self) -> Option<*const u32> {
+        self.0.word_ptr(vme_map::SENSING_CAL)
+    }
 }
 
 /// The sensing board's state between main-loop passes.

@@ -738,3 +738,126 @@ __sense_filter:
 40: moveq   #0, %d0
 41: movem.l (%sp)+, %d2-%d7/%a2
     rts
+
+/* ---- the sensing board's calibrated position (crates/sensing: locate_um) ----
+ * u32 __sense_locate(const i32 *inv, i32 vx, i32 vy, const Drift *drift, const i32 area[4],
+ *                    i32 out[2]):
+ * the drift removed from the filtered signals (vx, vy) (Q5 codes) when drift is not null
+ * (Drift::correct), then the bilinear blend of the inverse grid's cell (cal::position_um;
+ * inv is the grid's first word: rows of 65 (x, y) pairs, 64 cells of 2^11 Q5 codes a side),
+ * written to out (micrometres); returns 1 when the position lies outside area (x min,
+ * x max, y min, y max) by more than sensing::AREA_MARGIN_UM, else 0. Bit-identical to the
+ * Rust (tests/tests/firmware_functions.rs). Drift offsets: crates/sensing/src/drift.rs
+ * `layout` (asserted there). */
+    .set    D_O_Q13, 0              /* Drift::o_q13 (x, y) */
+    .set    D_G_Q24, 8              /* Drift::g_q24 (x, y) */
+    .set    AREA_MARGIN_UM, 5000    /* sensing::AREA_MARGIN_UM */
+    .set    INV_ROW, 520            /* bytes of an inverse grid row: 2 * INV_N words */
+    .set    INV_TOP, 131071         /* (64 << 11) - 1: the grid's last Q5 signal */
+
+/* CORRECT v, o, g: v = Drift's correct_axis(v, o, g); d2, d3 scratch. u = v - (o >> 8),
+ * g16 = g >> 8, gu = (g16 u) >> 16, v = u - gu + ((g16 gu) >> 16); products as i32. */
+.macro CORRECT v, o, g
+    move.l  \o, %d2
+    asr.l   #8, %d2
+    sub.l   %d2, \v
+    move.l  \g, %d3
+    asr.l   #8, %d3
+    move.l  %d3, %d2
+    muls.l  \v, %d2
+    swap    %d2
+    ext.l   %d2                     /* (g16 u) >> 16 */
+    sub.l   %d2, \v
+    muls.l  %d3, %d2
+    swap    %d2
+    ext.l   %d2
+    add.l   %d2, \v
+.endm
+
+/* INVCELL v, f: v = the inverse cell's index of signal v, f its Q10 fraction (cal's
+ * inv_cell: v + 2^16 clamped to 0..INV_TOP, then >> 11 and (& 2047) >> 1). */
+.macro INVCELL v, f
+    addi.l  #65536, \v
+    bpl.s   .Lic\@
+    moveq   #0, \v
+.Lic\@:
+    cmpi.l  #INV_TOP, \v
+    ble.s   .Lit\@
+    move.l  #INV_TOP, \v
+.Lit\@:
+    move.l  \v, \f
+    andi.l  #2047, \f
+    lsr.l   #1, \f
+    lsr.l   #8, \v
+    lsr.l   #3, \v
+.endm
+
+/* BILIN off, r: r = cal's bilinear blend of the cell at a0, word offset off (0: x, 4: y);
+ * d2 = fx, d3 = fy (Q10), d7 = 10; d0, d6 scratch. Products and sums as i32. */
+.macro BILIN off, r
+    move.l  \off(%a0), %d0          /* v0 */
+    move.l  8+\off(%a0), %d6        /* v1 */
+    sub.l   %d0, %d6
+    muls.l  %d2, %d6
+    asr.l   %d7, %d6
+    add.l   %d0, %d6                /* a = v0 + ((v1 - v0) fx >> 10) */
+    move.l  INV_ROW+\off(%a0), %d0  /* v2 */
+    move.l  INV_ROW+8+\off(%a0), \r /* v3 */
+    sub.l   %d0, \r
+    muls.l  %d2, \r
+    asr.l   %d7, \r
+    add.l   %d0, \r                 /* b = v2 + ((v3 - v2) fx >> 10) */
+    sub.l   %d6, \r
+    muls.l  %d3, \r
+    asr.l   %d7, \r
+    add.l   %d6, \r                 /* a + ((b - a) fy >> 10) */
+.endm
+
+    .section .text.__sense_locate, "ax"
+    .globl __sense_locate
+__sense_locate:
+    movem.l %d2-%d7, -(%sp)         /* arguments now at 28: inv, vx, vy, drift, area, out */
+    move.l  32(%sp), %d0            /* vx */
+    move.l  36(%sp), %d1            /* vy */
+    movea.l 40(%sp), %a0            /* drift */
+    cmpa.w  #0, %a0
+    beq.s   1f
+    CORRECT %d0, D_O_Q13(%a0), D_G_Q24(%a0)
+    CORRECT %d1, D_O_Q13+4(%a0), D_G_Q24+4(%a0)
+1:  INVCELL %d0, %d2                /* i, fx */
+    INVCELL %d1, %d3                /* j, fy */
+    movea.l 28(%sp), %a0            /* the cell: inv + j * INV_ROW + i * 8 */
+    move.l  %d1, %d4
+    lsl.l   #8, %d4
+    add.l   %d4, %d4                /* j * 512 */
+    lsl.l   #3, %d1
+    add.l   %d4, %d1                /* j * 520 */
+    adda.l  %d1, %a0
+    lsl.l   #3, %d0
+    adda.l  %d0, %a0
+    moveq   #10, %d7
+    BILIN   0, %d4                  /* x */
+    BILIN   4, %d5                  /* y */
+    movea.l 48(%sp), %a0            /* out */
+    move.l  %d4, (%a0)
+    move.l  %d5, 4(%a0)
+    movea.l 44(%sp), %a0            /* area: outside when any side's margin is negative */
+    move.l  %d4, %d0
+    sub.l   (%a0), %d0
+    addi.l  #AREA_MARGIN_UM, %d0    /* x - (x min - margin) */
+    move.l  4(%a0), %d1
+    addi.l  #AREA_MARGIN_UM, %d1
+    sub.l   %d4, %d1                /* (x max + margin) - x */
+    or.l    %d1, %d0
+    move.l  %d5, %d1
+    sub.l   8(%a0), %d1
+    addi.l  #AREA_MARGIN_UM, %d1    /* y - (y min - margin) */
+    or.l    %d1, %d0
+    move.l  12(%a0), %d1
+    addi.l  #AREA_MARGIN_UM, %d1
+    sub.l   %d5, %d1                /* (y max + margin) - y */
+    or.l    %d1, %d0
+    moveq   #31, %d1
+    lsr.l   %d1, %d0                /* 1 when negative */
+    movem.l (%sp)+, %d2-%d7
+    rts

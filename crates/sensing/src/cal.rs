@@ -18,6 +18,11 @@ use vme_map::records::cal;
 pub trait CalWords {
     /// Word `i` of the table.
     fn word(&mut self, i: u32) -> u32;
+    /// The address of word 0 where the table is memory-mapped (the 68020's global RAM), for
+    /// the assembly lookup; `None` (the default) where it is not, and the Rust reads words.
+    fn base(&mut self) -> Option<*const u32> {
+        None
+    }
 }
 
 /// Words checked per strobe slot (about 2,500 cycles on the 68020; the whole table in

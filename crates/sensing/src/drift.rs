@@ -21,8 +21,10 @@ pub const MAX_OFFSET_Q5: i32 = 256 << 5;
 /// Largest gain error accepted, Q24 (5 %).
 pub const MAX_GAIN_Q24: i32 = (1 << 24) / 20;
 
-/// The drift estimate of both axes.
+/// The drift estimate of both axes. `repr(C)`: `__sense_locate` (the runtime's assembly)
+/// reads the offsets and gains at the offsets [`layout`] asserts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct Drift {
     /// Offsets, Q5 codes times 256 (the LMS accumulator).
     pub o_q13: [i32; 2],
@@ -93,4 +95,16 @@ fn observe_axis(o_q13: &mut i32, g_q24: &mut i32, measured: i32, expected: i32) 
     // Non-zero differences to 1 by sign arithmetic.
     let d = (oc ^ o) | (gc ^ g);
     ((d | d.wrapping_neg()) as u32) >> 31
+}
+
+/// Byte offsets of [`Drift`]'s fields, as `__sense_locate` in `crates/rt/asm/rt.S` has them.
+pub mod layout {
+    use super::Drift;
+    use core::mem::offset_of;
+    /// `o_q13` (two words).
+    pub const O_Q13: usize = 0;
+    /// `g_q24` (two words).
+    pub const G_Q24: usize = 8;
+    const _: () = assert!(offset_of!(Drift, o_q13) == O_Q13);
+    const _: () = assert!(offset_of!(Drift, g_q24) == G_Q24);
 }

@@ -454,18 +454,16 @@ impl Sensing {
         beacon.t_us = conv.t_us;
         match (est, header) {
             (Some(e), Some(h)) => {
-                let mut v = e.q5;
-                if cfg.has(opt::DRIFT_REFERENCE) && self.drift.observations > 0 {
-                    v = self.drift.correct(v);
-                    flags |= bf::CORRECTED;
-                }
-                let p = cal::position_um(cal, v);
+                // Masks, not branches (a branch on these flags had its compare's flags
+                // clobbered on the 68k; docs/toolchain.md class 1).
+                let correct =
+                    cfg.has(opt::DRIFT_REFERENCE) as u32 & (self.drift.observations != 0) as u32;
+                let (p, out) = locate_um(cal, e.q5, &self.drift, correct, &h.area_um);
                 beacon.x_um = p[0];
                 beacon.y_um = p[1];
-                flags |= bf::VALID;
-                if outside(p, &h.area_um) {
-                    flags |= bf::EXTRAPOLATED;
-                }
+                flags |= bf::VALID
+                    | (bf::CORRECTED & correct.wrapping_neg())
+                    | (bf::EXTRAPOLATED & out.wrapping_neg());
                 if e.moving {
                     flags |= bf::MOVING;
                 }
@@ -620,6 +618,58 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
         out[7] = raw.x_q5;
         out[8] = raw.y_q5;
     }
+}
+
+/// The task-space position (micrometres) of filtered signals `v_q5`: the drift removed
+/// when `correct` is 1 ([`Drift::correct`]; 0: not), then the inverse grid ([`cal::position_um`]);
+/// with 1 when it lies outside the calibrated area `area_um` (with [`AREA_MARGIN_UM`]), else
+/// 0. On the 68020, with the table in mapped global RAM, one call of `__sense_locate` (the
+/// runtime's assembly, bit-identical: `tests/tests/firmware_functions.rs`).
+#[inline(always)]
+pub fn locate_um(
+    cal: &mut impl CalWords,
+    v_q5: [i32; 2],
+    drift: &Drift,
+    correct: u32,
+    area_um: &[i32; 4],
+) -> ([i32; 2], u32) {
+    #[cfg(target_arch = "m68k")]
+    if let Some(base) = cal.base() {
+        extern "C" {
+            fn __sense_locate(
+                inv: *const u32,
+                vx_q5: i32,
+                vy_q5: i32,
+                drift: *const Drift,
+                area_um: *const i32,
+                out: *mut [i32; 2],
+            ) -> u32;
+        }
+        let mut p = [0; 2];
+        // SAFETY: `base` maps the whole table (the checker read every word), so the inverse
+        // grid's cell at the clamped signals is readable; the drift pointer is null (no
+        // correction: masked, not selected) or a `repr(C)` Drift; the routine writes only
+        // `p`.
+        let out = unsafe {
+            __sense_locate(
+                base.add(vme_map::records::cal::INV as usize),
+                v_q5[0],
+                v_q5[1],
+                (drift as *const Drift as usize & (correct as usize).wrapping_neg())
+                    as *const Drift,
+                area_um.as_ptr(),
+                &mut p,
+            )
+        };
+        return (p, out);
+    }
+    let v = if correct != 0 {
+        drift.correct(v_q5)
+    } else {
+        v_q5
+    };
+    let p = cal::position_um(cal, v);
+    (p, outside(p, area_um) as u32)
 }
 
 /// Whether `p` lies outside the calibrated area (with [`AREA_MARGIN_UM`]).

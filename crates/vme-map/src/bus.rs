@@ -97,6 +97,14 @@ pub trait GlobalBus {
         }
         bits
     }
+    /// The address of the aligned word at `off` where global RAM is memory-mapped (the
+    /// 68020's VME window), for assembly routines that walk a table in place (the sensing
+    /// board's calibration lookup); `None` on buses that are not (the host's models), whose
+    /// users take the word-by-word path instead.
+    fn word_ptr(&mut self, off: u32) -> Option<*const u32> {
+        let _ = off;
+        None
+    }
 }
 
 /// A borrowed bus is a bus: lets code generic over a sized `G: GlobalBus` (inlined accesses
@@ -317,6 +325,10 @@ impl GlobalBus for MmioGlobal {
         // SAFETY: `out.len()` aligned words of mapped global RAM from `off` (offsets come
         // from `layout`), copied into `out`, which the routine writes only within.
         unsafe { __vme_read_words(Self::ptr::<u32>(off), out.as_mut_ptr(), out.len() as u32) }
+    }
+    #[inline(always)]
+    fn word_ptr(&mut self, off: u32) -> Option<*const u32> {
+        Some(Self::ptr::<u32>(off))
     }
 }
 
