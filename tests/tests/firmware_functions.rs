@@ -844,3 +844,50 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
     assert!(corrected > 5_000, "{corrected} corrected");
     assert!(edges > 5_000, "{edges} at an edge");
 }
+
+/// The sensing board's LED current feedback (`__sense_feedback`, the runtime's assembly)
+/// against `sensing::feedback_ma` on the host: drive levels and reference sums over their
+/// ranges, sums from the occlusion threshold to full scale, and the edges (sums of 0 and
+/// below, quotients at and beyond both clamps).
+#[test]
+fn the_sensing_feedback_matches_the_host_bit_for_bit() {
+    let mut f = any_routine("__sense_feedback");
+    let mut rng = sim_host::sim::Rng::new(53);
+    let mut r = move |lo: i32, hi: i32| lo + (rng.next_u64() % (hi - lo + 1) as u64) as i32;
+    let (mut low, mut high, mut between) = (0, 0, 0);
+    for n in 0..20_000 {
+        let level = r(0, 1023);
+        let s_ref = r(0, 2047);
+        let sum = match n % 4 {
+            0 => r(-2048, 0),
+            1 => r(1, 40),
+            _ => r(200, 2047),
+        };
+        let want = sensing::feedback_ma(level, sum, s_ref);
+        assert_eq!(
+            f(&[level, sum, s_ref]),
+            want,
+            "level {level}, sum {sum}, s_ref {s_ref}"
+        );
+        match want {
+            50 => low += 1,
+            1000 => high += 1,
+            _ => between += 1,
+        }
+    }
+    for (level, sum, s_ref) in [
+        (1000, 1, 2047),
+        (50, 2047, 0),
+        (0, -2_000_000_000, 5),
+        (1023, -1, 2047),
+    ] {
+        assert_eq!(
+            f(&[level, sum, s_ref]),
+            sensing::feedback_ma(level, sum, s_ref)
+        );
+    }
+    assert!(
+        low > 1_000 && high > 1_000 && between > 5_000,
+        "{low} / {between} / {high}"
+    );
+}

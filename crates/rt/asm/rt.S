@@ -861,3 +861,32 @@ __sense_locate:
     lsr.l   %d1, %d0                /* 1 when negative */
     movem.l (%sp)+, %d2-%d7
     rts
+
+/* ---- the sensing board's LED current feedback (crates/sensing: feedback_ma) ----
+ * i32 __sense_feedback(i32 level, i32 sum, i32 s_ref): level s_ref / max(sum, 1) (products
+ * and quotient as i32, the quotient toward zero; a sum of i32::MIN stays), clamped to
+ * LEVEL_MIN..LEVEL_MAX mA by the signs of the wrapped differences, as the Rust.
+ * Bit-identical (tests/tests/firmware_functions.rs). */
+    .set    LEVEL_MIN, 50           /* sensing::LEVEL_MIN_MA */
+    .set    LEVEL_MAX, 1000         /* sensing::LEVEL_MAX_MA (the driver's maximum) */
+    .section .text.__sense_feedback, "ax"
+    .globl __sense_feedback
+__sense_feedback:
+    move.l  4(%sp), %d0             /* level */
+    muls.l  12(%sp), %d0            /* level s_ref */
+    move.l  8(%sp), %d1             /* sum */
+    move.l  %d1, %a0
+    subq.l  #1, %a0                 /* sum - 1, wrapping (SUBQ to An leaves the flags) */
+    cmpa.w  #0, %a0
+    bge.s   1f
+    moveq   #1, %d1
+1:  divs.l  %d1, %d0
+    move.l  %d0, %d1
+    subi.l  #LEVEL_MIN, %d1
+    bpl.s   2f
+    moveq   #LEVEL_MIN, %d0
+2:  move.l  #LEVEL_MAX, %d1
+    sub.l   %d0, %d1
+    bpl.s   3f
+    move.l  #LEVEL_MAX, %d0
+3:  rts

@@ -704,9 +704,29 @@ fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u
 /// valid.) level < 2^10 and s_ref < 2^11: the product fits in 32 bits. (A reciprocal table
 /// in place of the division, within 1 mA of it, saved 90 cycles a slot but moved the fig.
 /// VI.2 scene, whose loop is that sensitive, off its loop.) Not inlined: inlined, it moved a
-/// condition-code clobber into `Sensing::step` (docs/toolchain.md class 1).
+/// condition-code clobber into `Sensing::step` (docs/toolchain.md class 1). On the 68020
+/// one call of `__sense_feedback` (the runtime's assembly: a `MULS.L` and a `DIVS.L`,
+/// bit-identical: `tests/tests/firmware_functions.rs`), where the compiled form called
+/// `__fx_div`'s 64-bit division.
 #[inline(never)]
-fn feedback_ma(level: i32, sum: i32, s_ref: i32) -> i32 {
+pub fn feedback_ma(level: i32, sum: i32, s_ref: i32) -> i32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __sense_feedback(level: i32, sum: i32, s_ref: i32) -> i32;
+        }
+        // SAFETY: a pure function in the runtime's assembly.
+        unsafe { __sense_feedback(level, sum, s_ref) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        host_feedback_ma(level, sum, s_ref)
+    }
+}
+
+/// [`feedback_ma`] in Rust (the host's, and the reference of the 68020's).
+#[cfg_attr(target_arch = "m68k", allow(dead_code))]
+fn host_feedback_ma(level: i32, sum: i32, s_ref: i32) -> i32 {
     // Sign masks, not max/clamp: their compares' flags were clobbered on the 68k
     // (docs/toolchain.md class 1). -1 where the condition holds.
     let pick = |m: i32, a: i32, b: i32| b ^ ((a ^ b) & m);
