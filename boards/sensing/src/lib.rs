@@ -47,7 +47,17 @@ pub struct Board {
     /// Whether a fault was seen in the current frame.
     fault_this_frame: bool,
     heartbeat: u32,
+    /// The configuration record's sequence number when it was last read whole (`None`:
+    /// not yet): the record is read again only when that word changes.
+    config_seq: Option<u32>,
+    /// Strobe frames since the drift record was last published.
+    drift_age: u32,
 }
+
+/// Strobe frames between publications of the drift estimate (16 ms): the host only shows it;
+/// the correction itself is the board's own. Published every frame, encoding and writing
+/// it cost a tenth of a slot's budget.
+pub const DRIFT_EVERY_FRAMES: u32 = 8;
 
 impl Default for Board {
     fn default() -> Self {
@@ -64,6 +74,8 @@ impl Board {
             fault: None,
             fault_this_frame: false,
             heartbeat: 0,
+            config_seq: None,
+            drift_age: 0,
         }
     }
 
@@ -120,10 +132,21 @@ impl Board {
         } else {
             None
         };
-        let config = if slot.processing == Some(0) {
+        // The host's configuration once a frame, read whole only when its sequence word
+        // moved (a publication always moves it): the same configurations as reading it
+        // every frame, for one word a frame.
+        let config = if slot.processing == Some(0)
+            && Some(vme_map::SENSING_CONFIG.sequence(g)) != self.config_seq
+        {
             match vme_map::SENSING_CONFIG.read(g) {
-                Ok((c, seq)) if seq != 0 => Some(Config::from_record(&c)),
-                Ok(_) => Some(Config::default()),
+                Ok((c, seq)) => {
+                    self.config_seq = Some(seq);
+                    Some(if seq != 0 {
+                        Config::from_record(&c)
+                    } else {
+                        Config::default()
+                    })
+                }
                 Err(_) => None,
             }
         } else {
@@ -158,6 +181,10 @@ impl Board {
                 vme_map::SENSING_RAW.publish_words(g, 0, &[self.sensing.raw.frame]);
             }
             if i == beacon_index::TIP {
+                self.drift_age += 1;
+            }
+            if i == beacon_index::TIP && self.drift_age >= DRIFT_EVERY_FRAMES {
+                self.drift_age = 0;
                 let d = &self.sensing.drift;
                 let o = d.offset_q5();
                 let rec = vme_map::records::SensingDrift {
