@@ -178,6 +178,35 @@ pub struct SceneResult {
     pub escape_ms: u32,
     /// Milliseconds the reflex held the arm for a bad input.
     pub hold_ms: u32,
+    /// Milliseconds (sampled each ms, once the reflex has left its start-up wait for a first
+    /// map) in which a pixel of the arm's 3 x 3 neighbourhood in C-space held a collision
+    /// with an obstacle where it really was but was unmarked in the map (the map's
+    /// conservativeness around the arm, under motion too; the exact oracle of
+    /// `cspace_oracle`).
+    pub unmarked_ms: u32,
+}
+
+/// Whether a pixel of the arm's 3 x 3 neighbourhood at absolute angles (`a`, `b`) holds a
+/// collision with one of `disks` but is unmarked in the map of `sim`.
+fn unmarked_near_arm(sim: &mut Sim, a: f64, b: f64, disks: &[cspace::Disk]) -> bool {
+    use crate::cspace_oracle::{pixel, Verdict, PIXEL_RAD};
+    use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_STRIPES};
+    use vme_map::GlobalBus;
+    let idx = |t: f64| (t / PIXEL_RAD).floor() as i64;
+    let (c1, c2) = (idx(a), idx(b));
+    for d2 in -1..=1 {
+        for d1 in -1..=1 {
+            let i1 = (c1 + d1).rem_euclid(128) as u32;
+            let i2 = (c2 + d2).rem_euclid(128) as u32;
+            let mut bus = sim.bus();
+            let marked = bus.read_u32(cspace_counter(i1, i2, 0)) != 0
+                || bus.read_u32(CSPACE_STRIPES + CSPACE_COUNTERS * i1) != 0;
+            if !marked && disks.iter().any(|d| pixel(d, i1, i2) == Verdict::Collides) {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// Runs one scene.
@@ -187,7 +216,9 @@ pub fn run_scene(s: &Scene) -> SceneResult {
     let per_ms = (1e-3 / sim.cfg.dt_s).round() as u64;
     let (wx, wy) = sim.cfg.wand.at(0.0).expect("a wand");
     let mut goal_time_s = None;
-    let (mut escape_ms, mut hold_ms, mut flags) = (0, 0, 0);
+    let (mut escape_ms, mut hold_ms, mut flags, mut unmarked_ms) = (0, 0, 0, 0);
+    let mut disks = Vec::new();
+    let mut running = false;
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(per_ms) {
@@ -196,10 +227,25 @@ pub fn run_scene(s: &Scene) -> SceneResult {
             if goal_time_s.is_none() && (x - wx).hypot(y - wy) <= 0.01 {
                 goal_time_s = Some(sim.t_s());
             }
-            if let Ok((r, _)) = vme_map::REFLEX_SUBGOAL.read(&mut sim.bus()) {
+            if let Ok((r, seq)) = vme_map::REFLEX_SUBGOAL.read(&mut sim.bus()) {
+                running = seq != 0 && r.flags & rf::WAITING == 0;
                 flags = r.flags;
                 escape_ms += (r.flags & rf::ESCAPING != 0) as u32;
                 hold_ms += (r.flags & rf::HOLD != 0) as u32;
+            }
+            let t = sim.t_s();
+            disks.clear();
+            disks.extend(sim.cfg.obstacles.iter().map(|o| {
+                let d = o.at(t);
+                cspace::Disk {
+                    x_um: (d.x_m * 1e6).round() as i32,
+                    y_um: (d.y_m * 1e6).round() as i32,
+                    r_um: (d.r_m * 1e6).ceil() as i32,
+                }
+            }));
+            // Once the reflex runs (before, it waits for a first map and the arm stands).
+            if running {
+                unmarked_ms += unmarked_near_arm(&mut sim, a, b, &disks) as u32;
             }
         }
     }
@@ -214,6 +260,7 @@ pub fn run_scene(s: &Scene) -> SceneResult {
         stalled: flags & rf::STALLED != 0,
         escape_ms,
         hold_ms,
+        unmarked_ms,
     }
 }
 
@@ -244,6 +291,12 @@ pub struct Summary {
     pub scenes_with_escapes: u64,
     /// Scenes in which the reflex held the arm for a bad input.
     pub scenes_with_holds: u64,
+    /// Scenes with at least one millisecond in which the map left unmarked a pixel next to
+    /// the arm that held a collision with an obstacle where it really was
+    /// ([`SceneResult::unmarked_ms`]), and those milliseconds over all scenes.
+    pub scenes_unmarked_near_arm: u64,
+    /// See [`Self::scenes_unmarked_near_arm`].
+    pub unmarked_ms: u64,
     /// Indices of the scenes with collisions.
     pub collision_scenes: Vec<u64>,
     /// Wall-clock seconds.
@@ -349,6 +402,8 @@ pub fn campaign(
         stalled: results.iter().filter(|r| r.stalled).count() as u64,
         scenes_with_escapes: results.iter().filter(|r| r.escape_ms > 0).count() as u64,
         scenes_with_holds: results.iter().filter(|r| r.hold_ms > 0).count() as u64,
+        scenes_unmarked_near_arm: results.iter().filter(|r| r.unmarked_ms > 0).count() as u64,
+        unmarked_ms: results.iter().map(|r| r.unmarked_ms as u64).sum(),
         collision_scenes: hits.scenes,
         wall_s: start.elapsed().as_secs_f64(),
     };
@@ -429,12 +484,12 @@ pub fn run_to_dir(
     let (summary, results) = campaign(kind, seed, n, threads, progress);
     write_summary(out, &summary)?;
     let mut csv = String::from(
-        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms\n",
+        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms,unmarked_ms\n",
     );
     for r in &results {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             r.index,
             r.collisions,
             r.min_clearance_m,
@@ -442,7 +497,8 @@ pub fn run_to_dir(
             r.final_error_m,
             r.stalled as u8,
             r.escape_ms,
-            r.hold_ms
+            r.hold_ms,
+            r.unmarked_ms
         );
     }
     std::fs::write(out.join("scenes.csv"), csv).map_err(io)?;
@@ -455,4 +511,44 @@ pub fn run_to_dir(
         .map_err(io)?;
     }
     Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The campaign's map check finds a pixel next to the arm that holds a collision while
+    /// the map is blank, and none once the map marks the arm's neighbourhood; a disk far
+    /// away is never found.
+    #[test]
+    fn the_map_check_finds_unmarked_collisions_next_to_the_arm() {
+        let mut sim = Sim::new(Config::default());
+        let [a, b] = [0.3, 0.5];
+        // A disk touching the arm's tip at (a, b): the tip's own pixel collides.
+        let (x, y) = tip(a, b);
+        let near = [cspace::Disk {
+            x_um: (x * 1e6) as i32 + 20_000,
+            y_um: (y * 1e6) as i32,
+            r_um: 25_400,
+        }];
+        let far = [cspace::Disk {
+            x_um: -400_000,
+            y_um: -300_000,
+            r_um: 25_400,
+        }];
+        assert!(unmarked_near_arm(&mut sim, a, b, &near));
+        assert!(!unmarked_near_arm(&mut sim, a, b, &far));
+        // Mark the 3 x 3 neighbourhood (one counter each is enough).
+        let idx = |t: f64| (t / crate::cspace_oracle::PIXEL_RAD).floor() as i64;
+        for d2 in -1..=1 {
+            for d1 in -1..=1 {
+                let i1 = (idx(a) + d1).rem_euclid(128) as u32;
+                let i2 = (idx(b) + d2).rem_euclid(128) as u32;
+                use vme_map::GlobalBus;
+                sim.bus()
+                    .write_u32(vme_map::layout::cspace_counter(i1, i2, 0), 0x0100_0000);
+            }
+        }
+        assert!(!unmarked_near_arm(&mut sim, a, b, &near));
+    }
 }

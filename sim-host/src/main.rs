@@ -301,7 +301,7 @@ fn main() -> ExitCode {
                     Ok(s) => {
                         bar.finish_and_clear();
                         println!(
-                            "reflex campaign, {name}: {} scenes (seed {seed}), {} with collisions ({} contacts), min clearance {:.1} mm; goals reached {} ({:.1}%), time to goal median {:.2} s, p95 {:.2} s, max {:.2} s; stalled {}; escapes in {} scenes; holds in {}; {:.0} s wall -> {}",
+                            "reflex campaign, {name}: {} scenes (seed {seed}), {} with collisions ({} contacts), min clearance {:.1} mm; goals reached {} ({:.1}%), time to goal median {:.2} s, p95 {:.2} s, max {:.2} s; stalled {}; escapes in {} scenes; holds in {}; map unmarked next to the arm in {} scenes ({} ms); {:.0} s wall -> {}",
                             s.scenes,
                             s.scenes_with_collisions,
                             s.collisions,
@@ -314,6 +314,8 @@ fn main() -> ExitCode {
                             s.stalled,
                             s.scenes_with_escapes,
                             s.scenes_with_holds,
+                            s.scenes_unmarked_near_arm,
+                            s.unmarked_ms,
                             s.wall_s,
                             dir.display()
                         );
