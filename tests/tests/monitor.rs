@@ -20,6 +20,13 @@ fn the_monitor_page_draws_and_updates_while_a_run_goes_on() {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../sim-host/scenarios/fig_vi_5_planner.toml");
     let sc = Scenario::load(&p).unwrap();
+    // Chromium's first start on a fresh or busy machine can take longer than the 4 s run
+    // (the page then saw only the last frame): start it once on a blank page first.
+    let _ = std::process::Command::new("chromium")
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"])
+        .arg("about:blank")
+        .stdin(std::process::Stdio::null())
+        .output();
     let mut monitor = Monitor::start(0, &sc.name, &sc.description).unwrap();
     let port = monitor.port();
     let run = std::thread::spawn(move || {
