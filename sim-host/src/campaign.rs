@@ -190,17 +190,13 @@ pub struct SceneResult {
 /// collision with one of `disks` but is unmarked in the map of `sim`.
 fn unmarked_near_arm(sim: &mut Sim, a: f64, b: f64, disks: &[cspace::Disk]) -> bool {
     use crate::cspace_oracle::{pixel, Verdict, PIXEL_RAD};
-    use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_STRIPES};
-    use vme_map::GlobalBus;
     let idx = |t: f64| (t / PIXEL_RAD).floor() as i64;
     let (c1, c2) = (idx(a), idx(b));
     for d2 in -1..=1 {
         for d1 in -1..=1 {
             let i1 = (c1 + d1).rem_euclid(128) as u32;
             let i2 = (c2 + d2).rem_euclid(128) as u32;
-            let mut bus = sim.bus();
-            let marked = bus.read_u32(cspace_counter(i1, i2, 0)) != 0
-                || bus.read_u32(CSPACE_STRIPES + CSPACE_COUNTERS * i1) != 0;
+            let marked = crate::run::pixel_marked(&mut sim.bus(), i1, i2);
             if !marked && disks.iter().any(|d| pixel(d, i1, i2) == Verdict::Collides) {
                 return true;
             }

@@ -103,9 +103,7 @@ fn draw(global: &mut [u8], disks: &[(i32, i32, i32)]) -> Result<(), String> {
 fn marked(global: &mut [u8], a: [f64; 2]) -> bool {
     let px = std::f64::consts::TAU / 128.0;
     let i = |x: f64| ((x / px).floor() as i64).rem_euclid(128) as u32;
-    let mut g = ArrayBus::new(global);
-    g.read_u32(vme_map::layout::cspace_counter(i(a[0]), i(a[1]), 0)) != 0
-        || g.read_u32(vme_map::layout::CSPACE_STRIPES + 4 * i(a[0])) != 0
+    crate::run::pixel_marked(&mut ArrayBus::new(global), i(a[0]), i(a[1]))
 }
 
 /// The records the host writes before pass `k`: the servo state of an arm at rest at

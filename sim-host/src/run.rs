@@ -252,17 +252,21 @@ pub fn reflex_goal(g: &mut impl GlobalBus) -> Option<[f64; 2]> {
 
 /// The C-space map in global RAM `g`: which pixels are marked (`[i2 * 128 + i1]`).
 pub fn marked_in(g: &mut impl GlobalBus) -> Vec<bool> {
-    use vme_map::layout::{cspace_counter, CSPACE_STRIPES};
-    let stripes: Vec<u32> = (0..128)
-        .map(|i| g.read_u32(CSPACE_STRIPES + 4 * i))
-        .collect();
     let mut v = Vec::with_capacity(128 * 128);
     for i2 in 0..128 {
         for i1 in 0..128 {
-            v.push(g.read_u32(cspace_counter(i1, i2, 0)) != 0 || stripes[i1 as usize] != 0);
+            v.push(pixel_marked(g, i1, i2));
         }
     }
     v
+}
+
+/// Whether the C-space map in global RAM `g` marks pixel (`i1`, `i2`) (each taken modulo
+/// 128): its word's first counter or its column's stripe word is not zero.
+pub fn pixel_marked(g: &mut (impl GlobalBus + ?Sized), i1: u32, i2: u32) -> bool {
+    use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_SIDE, CSPACE_STRIPES};
+    g.read_u32(cspace_counter(i1, i2, 0)) != 0
+        || g.read_u32(CSPACE_STRIPES + CSPACE_COUNTERS * (i1 % CSPACE_SIDE)) != 0
 }
 
 /// The pixels that hold a configuration colliding with one of `disks` (the exact oracle).

@@ -182,19 +182,19 @@ impl Board {
             }
             if i == beacon_index::TIP {
                 self.drift_age += 1;
-            }
-            if i == beacon_index::TIP && self.drift_age >= DRIFT_EVERY_FRAMES {
-                self.drift_age = 0;
-                let d = &self.sensing.drift;
-                let o = d.offset_q5();
-                let rec = vme_map::records::SensingDrift {
-                    ox_q5: o[0],
-                    oy_q5: o[1],
-                    gx_q24: d.g_q24[0],
-                    gy_q24: d.g_q24[1],
-                    observations: d.observations,
-                };
-                vme_map::SENSING_DRIFT.publish(g, &rec);
+                if self.drift_age >= DRIFT_EVERY_FRAMES {
+                    self.drift_age = 0;
+                    let d = &self.sensing.drift;
+                    let o = d.offset_q5();
+                    let rec = vme_map::records::SensingDrift {
+                        ox_q5: o[0],
+                        oy_q5: o[1],
+                        gx_q24: d.g_q24[0],
+                        gy_q24: d.g_q24[1],
+                        observations: d.observations,
+                    };
+                    vme_map::SENSING_DRIFT.publish(g, &rec);
+                }
             }
         }
         // Most slots have no event: the word is tested before it is decoded.
