@@ -59,7 +59,10 @@ macro_rules! record {
         }
     ) => {
         $(#[$meta])*
+        // In word order (`repr(C)`), as in global RAM: firmware assembly may address a
+        // copy by offset (`sensing::layout`).
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        #[repr(C)]
         pub struct $name {
             $( $(#[$fmeta])* pub $field: $ty ),+
         }

@@ -69,7 +69,10 @@ use crate::record::Record;
 macro_rules! beacon_table {
     ($(#[$meta:meta])* $name:ident of $item:ident, [$($field:literal),+ $(,)?]) => {
         $(#[$meta])*
+        // In word order (`repr(C)`), as in global RAM: the sensing board's assembly
+        // addresses its copy by offset (`sensing::layout`).
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        #[repr(C)]
         pub struct $name {
             /// Number of complete strobe frames published.
             pub frame: u32,
