@@ -13,6 +13,9 @@ use system_tests::images_dir;
 use vme_map::records::beacon_flags as bf;
 use vme_map::{BoardId, BoardState, FaultCode, GLOBAL_RAM_SIZE};
 
+/// Words the probe and the host write per slot.
+const W: usize = sensing::SCRIPT_OUT_WORDS;
+
 /// Scratch RAM for probe arguments: above the image (under 64 KiB) and its 5000-slot
 /// script and results (340 KiB), well below the stack at the top of the 1 MiB.
 const BUF: u32 = 0x0002_0000;
@@ -26,6 +29,10 @@ fn script(n: usize) -> Vec<u32> {
     // beacon 4 saturated for a while; the tip at codes near the forward grid of its angles.
     for i in 0..n {
         timer = timer.wrapping_add(498 + (rng.next_u64() % 5) as u32);
+        // Now and then a late slot (the next is lit for less: the crosstalk factor moves).
+        if i % 37 == 0 {
+            timer = timer.wrapping_add((rng.next_u64() % 400) as u32);
+        }
         let b = (i + 6) % 8; // the beacon whose sample is read at slot i (lit at i - 2)
         let base = [(-900 + 230 * b as i32), (700 - 180 * b as i32)];
         let drift = if b == 3 { (i as i32 / 8) % 400 } else { 0 };
@@ -37,11 +44,20 @@ fn script(n: usize) -> Vec<u32> {
         if b == 2 && (800..1200).contains(&i) {
             sum = 2048 + 40;
         }
+        // Beacon 1 now and then at the occlusion threshold: just below, then just at it.
+        if b == 1 && (2000..2400).contains(&i) {
+            sum = 2048 + sensing::OCCLUDED_BELOW_CODES - 1 + (i as i32 / 8) % 2;
+        }
         if b == 4 && (1500..1600).contains(&i) {
             flags |= 2;
         }
         if b == 5 {
             flags |= 4;
+        }
+        // Every 500 slots another set of options (each step on or off), and a fixed drive.
+        if i % 500 == 250 {
+            let options = [0x0, 0x5, 0xA, 0x3, 0xC, 0x9, 0x6, 0xE, 0x7, 0xF][i / 500 % 10];
+            flags |= 8 | options << 8 | (((i / 500) as u32 * 97) % 900) << 12;
         }
         let first_slot = i < 2;
         w.extend_from_slice(&[
@@ -58,13 +74,13 @@ fn script(n: usize) -> Vec<u32> {
     w
 }
 
-/// The host's run of the same script: nine words per slot as the probe writes them.
+/// The host's run of the same script: `W` words per slot as the probe writes them.
 fn host_run(inputs: &[u32], global: &mut [u8]) -> Vec<i32> {
     let mut s = sensing::Sensing::new();
     let mut g = vme_map::ArrayBus::new(global);
     let mut out = Vec::new();
     for w in inputs.chunks(8) {
-        let mut o = [0; 9];
+        let mut o = [0; W];
         let w: &[u32; 8] = w.try_into().expect("eight words a slot");
         sensing::scripted_slot(&mut s, w, &mut Cal(&mut g), &mut o);
         out.extend_from_slice(&o);
@@ -119,25 +135,28 @@ fn the_sensing_image_steps_like_the_host() {
         });
     assert_eq!(ret, 0);
     let host = host_run(&inputs, &mut global);
-    let mut seen = [0usize; 4];
+    let mut seen = [0usize; 7];
     for i in 0..n as usize {
-        let got: Vec<i32> = (0..9)
+        let got: Vec<i32> = (0..W)
             .map(|k| {
-                let a = (out + 4 * (9 * i + k) as u32) as usize;
+                let a = (out + 4 * (W * i + k) as u32) as usize;
                 i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
             })
             .collect();
-        assert_eq!(got, host[9 * i..9 * i + 9], "slot {i}");
-        let flags = host[9 * i + 6] as u32;
+        assert_eq!(got, host[W * i..W * i + W], "slot {i}");
+        let flags = host[W * i + 6] as u32;
         seen[0] += (flags & bf::VALID != 0) as usize;
         seen[1] += (flags & bf::OCCLUDED != 0) as usize;
         seen[2] += (flags & bf::SATURATED != 0) as usize;
         seen[3] += (flags & bf::CORRECTED != 0) as usize;
+        seen[4] += (flags & (bf::VALID | bf::CORRECTED) == bf::VALID) as usize;
+        seen[5] += (flags & bf::MOVING != 0) as usize;
+        seen[6] += (flags & (bf::VALID | bf::FILLING) == bf::FILLING) as usize;
     }
     // The script reached every path worth comparing.
     assert!(
         seen.iter().all(|&c| c > 0),
-        "valid, occluded, saturated, corrected: {seen:?}"
+        "valid, occluded, saturated, corrected, valid uncorrected, moving, filling: {seen:?}"
     );
 }
 

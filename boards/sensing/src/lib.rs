@@ -162,15 +162,17 @@ impl Board {
         );
         if let Some(b) = out.beacon {
             // Only the processed beacon's words change (and the frame after beacon 7).
+            // Published from where the words lie (a copy of each record first cost 130
+            // cycles a slot on the 68020).
             let i = b as usize & 7;
-            let o = self.sensing.objects.beacons[i];
+            let o = &self.sensing.objects.beacons[i];
             let base = 1 + 4 * i as u32;
             vme_map::OBJECTS.publish_words(
                 g,
                 base,
                 &[o.x_um as u32, o.y_um as u32, o.t_us, o.flags],
             );
-            let r = self.sensing.raw.beacons[i];
+            let r = &self.sensing.raw.beacons[i];
             vme_map::SENSING_RAW.publish_words(
                 g,
                 base,

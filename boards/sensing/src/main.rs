@@ -24,7 +24,7 @@ fn main() -> ! {
 
 /// Test probe (never called by the board): runs a fresh sensing logic over `n` strobe slots
 /// of scripted inputs, eight words each, with the calibration table in global RAM, and
-/// writes nine words per slot to `out` (`sensing::scripted_slot` has the format). The
+/// writes `sensing::SCRIPT_OUT_WORDS` words per slot to `out` (`sensing::scripted_slot` has the format). The
 /// system tests compare it with the host.
 #[no_mangle]
 #[link_section = ".text.probe.sensing_run"]
@@ -34,13 +34,13 @@ pub extern "C" fn sensing_probe_run(inputs: *const u32, n: u32, out: *mut i32) -
     let mut g = unsafe { MmioGlobal::new() };
     let mut i = 0;
     while i < n {
-        // SAFETY: the caller passes 8 n input words and room for 9 n output words.
+        // SAFETY: the caller passes 8 n input words and room for `SCRIPT_OUT_WORDS` n output words.
         unsafe {
             probe_slot(
                 &mut s,
                 &mut g,
                 inputs.add(8 * i as usize),
-                out.add(9 * i as usize),
+                out.add(sensing::SCRIPT_OUT_WORDS * i as usize),
             )
         };
         i += 1;
@@ -48,15 +48,20 @@ pub extern "C" fn sensing_probe_run(inputs: *const u32, n: u32, out: *mut i32) -
     0
 }
 
-/// One slot of [`sensing_probe_run`]: eight input words at `w`, nine output words at `o`.
+/// One slot of [`sensing_probe_run`]: eight input words at `w`, `SCRIPT_OUT_WORDS` output words at `o`.
 ///
 /// # Safety
-/// `w` must point at 8 readable words and `o` at 9 writable ones.
+/// `w` must point at 8 readable words and `o` at `sensing::SCRIPT_OUT_WORDS` writable ones.
 #[inline(never)]
 #[link_section = ".text.probe.sensing_slot"]
 unsafe fn probe_slot(s: &mut sensing::Sensing, g: &mut MmioGlobal, w: *const u32, o: *mut i32) {
     // SAFETY: the caller's contract; u32 and i32 arrays are word aligned like the buffers.
-    let (w, o) = unsafe { (&*(w as *const [u32; 8]), &mut *(o as *mut [i32; 9])) };
+    let (w, o) = unsafe {
+        (
+            &*(w as *const [u32; 8]),
+            &mut *(o as *mut [i32; sensing::SCRIPT_OUT_WORDS]),
+        )
+    };
     sensing::scripted_slot(s, w, &mut board_sensing::GlobalCal(g), o);
 }
 

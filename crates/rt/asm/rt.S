@@ -599,12 +599,12 @@ __fx_mul_shr:
     .set    F_COUNT, 1042           /* u16 samples held */
     .set    F_SINCE_N, 1044         /* u16 samples since rest */
     .set    F_MOVED, 1046           /* u16 samples since the last movement */
-    .section .text.__sense_filter, "ax"
-    .globl __sense_filter
-__sense_filter:
-    movem.l %d2-%d7/%a2, -(%sp)     /* arguments now at 32: f, qx, qy, adaptive, out, recip */
-    movea.l 32(%sp), %a0
-    movea.l 52(%sp), %a1
+/* FILTER a: the body of __sense_filter with its six arguments at a(%sp) on (f, qx, qy,
+ * adaptive, out, recip); ends with d0 = 1 (estimate written) or 0 at its label 41. Uses
+ * d0-d7, a0-a2. Also expanded in place by __sense_process (no call, no second save). */
+.macro FILTER a
+    movea.l \a+0(%sp), %a0
+    movea.l \a+20(%sp), %a1
     moveq   #0, %d0
     move.b  F_NEXT(%a0), %d0        /* next */
     moveq   #0, %d1
@@ -619,7 +619,7 @@ __sense_filter:
     scc     %d3                     /* -1: the window since rest was full (since >= LONG) */
     extb.l  %d3
     movea.l %a0, %a2                /* axis x, then axis y */
-    move.l  36(%sp), %d4
+    move.l  \a+4(%sp), %d4
     moveq   #1, %d7
 1:  move.w  (%a2,%d1.l), %d5        /* the sample leaving the short window */
     ext.l   %d5
@@ -635,7 +635,7 @@ __sense_filter:
     add.l   %d6, F_SINCE(%a2)
     move.w  %d4, (%a2,%d0.l)        /* ring[next] = v as i16 */
     lea     F_Y(%a2), %a2
-    move.l  40(%sp), %d4
+    move.l  \a+8(%sp), %d4
     dbra    %d7, 1b
     addq.b  #1, F_NEXT(%a0)         /* next wraps at 256 */
     cmpi.w  #256, F_COUNT(%a0)
@@ -652,7 +652,7 @@ __sense_filter:
     bcc.s   4f
     subq.w  #1, %d6                 /* saturates at 0xFFFF */
 4:  move.w  %d6, F_MOVED(%a0)
-    tst.l   44(%sp)
+    tst.l   \a+12(%sp)
     beq.s   20f                     /* not adaptive: no movement check, the short window */
     cmpi.w  #32, %d5
     bls.s   20f                     /* since <= SHORT: the short window */
@@ -684,7 +684,7 @@ __sense_filter:
     /* at rest: the long window, d0/d1 its means, d5 its length */
     cmpi.w  #8, F_COUNT(%a0)
     bcs.w   40f
-    movea.l 48(%sp), %a2
+    movea.l \a+16(%sp), %a2
     bra.s   30f
 7:  move.l  F_SHORT(%a0), F_SINCE(%a0)     /* moved: restart the long window from the short */
     move.l  F_Y+F_SHORT(%a0), F_Y+F_SINCE(%a0)
@@ -695,7 +695,7 @@ __sense_filter:
     move.w  F_COUNT(%a0), %d4
     cmpi.w  #8, %d4
     bcs.s   40f                     /* fewer than MIN_VALID: no estimate */
-    movea.l 48(%sp), %a2
+    movea.l \a+16(%sp), %a2
     moveq   #32, %d5
     move.l  F_SHORT(%a0), %d0
     asr.l   #2, %d0
@@ -719,7 +719,7 @@ __sense_filter:
 31: move.w  %d6, 8(%a2)
     moveq   #0, %d6                 /* moving: adaptive and moved < SHORT */
     moveq   #0, %d7                 /* filling: window < (adaptive ? LONG : SHORT) */
-    tst.l   44(%sp)
+    tst.l   \a+12(%sp)
     beq.s   32f
     cmpi.w  #128, F_MOVED(%a0)      /* sensing::filter::MOVING_HOLD */
     scs     %d6
@@ -736,7 +736,15 @@ __sense_filter:
     moveq   #1, %d0
     bra.s   41f
 40: moveq   #0, %d0
-41: movem.l (%sp)+, %d2-%d7/%a2
+41:
+.endm
+
+    .section .text.__sense_filter, "ax"
+    .globl __sense_filter
+__sense_filter:
+    movem.l %d2-%d7/%a2, -(%sp)     /* arguments now at 32: f, qx, qy, adaptive, out, recip */
+    FILTER  32
+    movem.l (%sp)+, %d2-%d7/%a2
     rts
 
 /* ---- the sensing board's calibrated position (crates/sensing: locate_um) ----
@@ -813,20 +821,20 @@ __sense_filter:
     add.l   %d6, \r                 /* a + ((b - a) fy >> 10) */
 .endm
 
-    .section .text.__sense_locate, "ax"
-    .globl __sense_locate
-__sense_locate:
-    movem.l %d2-%d7, -(%sp)         /* arguments now at 28: inv, vx, vy, drift, area, out */
-    move.l  32(%sp), %d0            /* vx */
-    move.l  36(%sp), %d1            /* vy */
-    movea.l 40(%sp), %a0            /* drift */
+/* LOCATE a: the body of __sense_locate with its six arguments at a(%sp) on (inv, vx, vy,
+ * drift, area, out); ends with d0 = 1 (outside the area) or 0. Uses d0-d7, a0. Also
+ * expanded in place by __sense_process. */
+.macro LOCATE a
+    move.l  \a+4(%sp), %d0            /* vx */
+    move.l  \a+8(%sp), %d1            /* vy */
+    movea.l \a+12(%sp), %a0            /* drift */
     cmpa.w  #0, %a0
     beq.s   1f
     CORRECT %d0, D_O_Q13(%a0), D_G_Q24(%a0)
     CORRECT %d1, D_O_Q13+4(%a0), D_G_Q24+4(%a0)
 1:  INVCELL %d0, %d2                /* i, fx */
     INVCELL %d1, %d3                /* j, fy */
-    movea.l 28(%sp), %a0            /* the cell: inv + j * INV_ROW + i * 8 */
+    movea.l \a+0(%sp), %a0            /* the cell: inv + j * INV_ROW + i * 8 */
     move.l  %d1, %d4
     lsl.l   #8, %d4
     add.l   %d4, %d4                /* j * 512 */
@@ -838,10 +846,10 @@ __sense_locate:
     moveq   #10, %d7
     BILIN   0, %d4                  /* x */
     BILIN   4, %d5                  /* y */
-    movea.l 48(%sp), %a0            /* out */
+    movea.l \a+20(%sp), %a0            /* out */
     move.l  %d4, (%a0)
     move.l  %d5, 4(%a0)
-    movea.l 44(%sp), %a0            /* area: outside when any side's margin is negative */
+    movea.l \a+16(%sp), %a0            /* area: outside when any side's margin is negative */
     move.l  %d4, %d0
     sub.l   (%a0), %d0
     addi.l  #AREA_MARGIN_UM, %d0    /* x - (x min - margin) */
@@ -859,6 +867,13 @@ __sense_locate:
     or.l    %d1, %d0
     moveq   #31, %d1
     lsr.l   %d1, %d0                /* 1 when negative */
+.endm
+
+    .section .text.__sense_locate, "ax"
+    .globl __sense_locate
+__sense_locate:
+    movem.l %d2-%d7, -(%sp)         /* arguments now at 28: inv, vx, vy, drift, area, out */
+    LOCATE  28
     movem.l (%sp)+, %d2-%d7
     rts
 
@@ -890,3 +905,202 @@ __sense_feedback:
     bpl.s   3f
     move.l  #LEVEL_MAX, %d0
 3:  rts
+
+/* ---- the sensing board's common slot (crates/sensing: Sensing::process) ----
+ * u32 __sense_process(Sensing *s, const Conversion *c, const AdcSample *smp, const i32 *inv,
+ *                     const i32 *area, Estimate *e, const Tables *t):
+ * the processing of one sample when it is the common case: a sum of OCCLUDED_BELOW codes or
+ * more, no input over range, a checked table (inv: its inverse grid, area: its calibrated
+ * square). Then, as the Rust: the previous sample's record (prev_next, prev_raw), the
+ * crosstalk correction, the filter (__sense_filter), the LED feedback (or the fixed level),
+ * the raw record, the object record (position by __sense_locate, or filling), the frame
+ * counters after beacon 7. Returns 1 with the estimate in *e, 0 without one (filling), or
+ * 2 for any other case, with nothing changed (the Rust takes it). Bit-identical to
+ * Sensing::process (tests/tests/sensing.rs compares the image with the host slot by slot).
+ * Offsets: crates/sensing/src/lib.rs `layout` (asserted there). */
+    .set    S_OBJ_FRAME, 8384       /* Sensing::objects.frame */
+    .set    S_OBJ_B, 8388           /* Sensing::objects.beacons: 16 bytes each */
+    .set    S_RAW_FRAME, 8516       /* Sensing::raw.frame */
+    .set    S_RAW_B, 8520           /* Sensing::raw.beacons: 16 bytes each */
+    .set    S_DRIFT, 8648           /* Sensing::drift (observations 16 bytes on) */
+    .set    S_OPT, 8668             /* Sensing::config.options (u32) */
+    .set    S_SREF, 8672            /* Sensing::config.s_ref_codes */
+    .set    S_LEVEL, 8676           /* Sensing::config.level_ma */
+    .set    S_PREV_RAW, 8680        /* Sensing::prev_raw (x, y) */
+    .set    S_LEVELS, 8688          /* Sensing::levels: u16 each */
+    .set    S_PREV_NEXT, 8704       /* Sensing::prev_next (u8) */
+    .set    T_XTALK, 1028           /* Tables::crosstalk_q16 */
+    .set    FILTER_BYTES, 1048      /* sensing::filter::layout::FILTER_BYTES */
+    .section .text.__sense_process, "ax"
+    .globl __sense_process
+__sense_process:
+    /* the rare cases first, before any register is saved (they leave for the Rust) */
+    movea.l 12(%sp), %a0            /* smp */
+    tst.b   6(%a0)
+    bne.w   90f                     /* over range: the Rust */
+    moveq   #0, %d0
+    move.w  4(%a0), %d0
+    cmpi.l  #2048+205, %d0          /* sensing::OCCLUDED_BELOW_CODES above 0 V */
+    blt.w   90f                     /* occluded: the Rust */
+    movem.l %d2-%d7/%a2-%a5, -(%sp) /* arguments now at 44: s, c, smp, inv, area, e, t */
+    move.l  %d0, %d6
+    subi.l  #2048, %d6              /* sum, codes above 0 V */
+    moveq   #0, %d4
+    move.w  (%a0), %d4
+    subi.l  #2048, %d4              /* raw x */
+    moveq   #0, %d5
+    move.w  2(%a0), %d5
+    subi.l  #2048, %d5              /* raw y */
+    movea.l 44(%sp), %a5            /* s */
+    movea.l 48(%sp), %a3            /* c */
+    moveq   #0, %d7
+    move.b  6(%a3), %d7             /* the beacon */
+    move.b  S_PREV_NEXT(%a5), %d0   /* the beacon lit after the previous sample's */
+    move.l  S_PREV_RAW(%a5), %d1
+    move.l  S_PREV_RAW+4(%a5), %d2
+    move.l  %d4, S_PREV_RAW(%a5)
+    move.l  %d5, S_PREV_RAW+4(%a5)
+    move.b  %d7, %d3
+    addq.b  #1, %d3
+    andi.b  #7, %d3
+    move.b  %d3, S_PREV_NEXT(%a5)
+    /* crosstalk: q2 = raw << 2, plus ((raw - prev) f) >> 14 when on and consecutive */
+    sub.l   %d4, %d1                /* prev - raw, negated below */
+    sub.l   %d5, %d2
+    lsl.l   #2, %d4
+    lsl.l   #2, %d5
+    cmp.b   %d7, %d0
+    bne.s   1f
+    btst    #3, S_OPT+3(%a5)        /* sensing_options::CROSSTALK */
+    beq.s   1f
+    moveq   #0, %d3
+    move.w  4(%a3), %d3             /* lit ticks */
+    subi.l  #296, %d3               /* (lit - 304 + 8) >> 4, clamped to 0..31 */
+    asr.l   #4, %d3
+    bpl.s   2f
+    moveq   #0, %d3
+2:  moveq   #31, %d0
+    cmp.l   %d0, %d3
+    ble.s   3f
+    move.l  %d0, %d3
+3:  movea.l 68(%sp), %a0            /* tables */
+    move.l  T_XTALK(%a0,%d3.l*4), %d3
+    neg.l   %d1                     /* raw - prev */
+    neg.l   %d2
+    muls.l  %d3, %d1
+    muls.l  %d3, %d2
+    moveq   #14, %d3
+    asr.l   %d3, %d1
+    asr.l   %d3, %d2
+    add.l   %d1, %d4
+    add.l   %d2, %d5
+    /* the filter, in place: FILTER's arguments (f, qx, qy, adaptive, e, recip) pushed */
+1:  move.l  %d7, %d0
+    mulu.w  #FILTER_BYTES, %d0
+    lea     (%a5,%d0.l), %a4        /* the beacon's filter */
+    move.l  %d6, -(%sp)             /* sum, kept */
+    move.l  72(%sp), -(%sp)         /* recip: the tables' first (68 + 4) */
+    move.l  72(%sp), -(%sp)         /* e (64 + 8) */
+    moveq   #0, %d0
+    btst    #2, S_OPT+3(%a5)        /* sensing_options::ADAPTIVE_FILTER */
+    sne     %d0
+    neg.b   %d0
+    move.l  %d0, -(%sp)
+    move.l  %d5, -(%sp)
+    move.l  %d4, -(%sp)
+    move.l  %a4, -(%sp)
+    FILTER  0
+    lea     24(%sp), %sp
+    move.l  (%sp)+, %d6             /* sum */
+    move.l  %d0, %d3                /* 1: an estimate */
+    moveq   #0, %d7
+    move.b  6(%a3), %d7             /* the beacon */
+    /* the LED feedback: level s_ref / sum clamped, or the fixed level */
+    lea     S_LEVELS(%a5,%d7.l*2), %a0
+    btst    #0, S_OPT+3(%a5)        /* sensing_options::CURRENT_FEEDBACK */
+    beq.s   5f
+    moveq   #0, %d0
+    move.w  (%a0), %d0
+    muls.l  S_SREF(%a5), %d0
+    divs.l  %d6, %d0                /* sum >= 205 here */
+    move.l  %d0, %d1                /* the clamps by the wrapped differences' signs, */
+    subi.l  #LEVEL_MIN, %d1         /* as __sense_feedback */
+    bpl.s   4f
+    moveq   #LEVEL_MIN, %d0
+4:  move.l  #LEVEL_MAX, %d1
+    sub.l   %d0, %d1
+    bpl.s   6f
+    move.l  #LEVEL_MAX, %d0
+    bra.s   6f
+5:  move.l  S_LEVEL(%a5), %d0
+6:  move.w  %d0, (%a0)
+    /* the raw record */
+    move.l  %d7, %d1
+    lsl.l   #4, %d1
+    lea     S_RAW_B(%a5,%d1.l), %a0
+    move.l  %d6, 8(%a0)             /* sum_codes */
+    andi.l  #0xffff, %d0
+    move.l  %d0, 12(%a0)            /* level_ma */
+    lea     S_OBJ_B(%a5,%d1.l), %a2 /* the object record */
+    move.l  (%a3), 8(%a2)           /* t_us */
+    movea.l 64(%sp), %a1            /* e */
+    tst.l   %d3
+    beq.w   20f
+    move.l  (%a1), (%a0)            /* raw x_q5, y_q5 */
+    move.l  4(%a1), 4(%a0)
+    /* the position, in place: LOCATE's arguments (inv, x, y, correct ? drift : 0, area,
+     * &record) pushed */
+    moveq   #0, %d2                 /* correct */
+    btst    #1, S_OPT+3(%a5)        /* sensing_options::DRIFT_REFERENCE */
+    beq.s   7f
+    tst.l   S_DRIFT+16(%a5)
+    sne     %d2
+    neg.b   %d2
+7:  move.l  %d2, -(%sp)             /* correct, kept */
+    move.l  %a2, -(%sp)             /* out: x_um, y_um */
+    move.l  68(%sp), -(%sp)         /* area (60 + 8) */
+    suba.l  %a0, %a0
+    tst.l   %d2
+    beq.s   8f
+    lea     S_DRIFT(%a5), %a0
+8:  move.l  %a0, -(%sp)
+    move.l  4(%a1), -(%sp)
+    move.l  (%a1), -(%sp)
+    move.l  80(%sp), -(%sp)         /* inv (56 + 24) */
+    LOCATE  0
+    lea     24(%sp), %sp
+    move.l  (%sp)+, %d2             /* correct */
+    /* flags: VALID, CORRECTED, EXTRAPOLATED, MOVING, FILLING, samples << 8 */
+    moveq   #0, %d1
+    move.w  8(%a1), %d1
+    lsl.l   #8, %d1
+    addq.l  #1, %d1                 /* VALID */
+    lsl.l   #3, %d2
+    or.l    %d2, %d1                /* CORRECTED */
+    lsl.l   #5, %d0
+    or.l    %d0, %d1                /* EXTRAPOLATED */
+    tst.b   10(%a1)
+    beq.s   9f
+    ori.l   #128, %d1               /* MOVING */
+9:  tst.b   11(%a1)
+    beq.s   10f
+    ori.l   #64, %d1                /* FILLING */
+10: moveq   #1, %d3                 /* an estimate (LOCATE used d3) */
+    moveq   #0, %d7
+    move.b  6(%a3), %d7             /* the beacon */
+    bra.s   21f
+    /* no estimate yet: FILLING and the samples held */
+20: moveq   #0, %d1
+    move.w  F_COUNT(%a4), %d1       /* the filter's samples */
+    lsl.l   #8, %d1
+    ori.l   #64, %d1                /* FILLING */
+21: move.l  %d1, 12(%a2)
+    cmpi.b  #7, %d7
+    bne.s   22f
+    addq.l  #1, S_OBJ_FRAME(%a5)
+    move.l  S_OBJ_FRAME(%a5), S_RAW_FRAME(%a5)
+22: move.l  %d3, %d0
+    movem.l (%sp)+, %d2-%d7/%a2-%a5
+    rts
+90: moveq   #2, %d0
+    rts

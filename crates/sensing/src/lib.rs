@@ -74,8 +74,9 @@ const CROSSTALK_Q16: [i32; 32] = [
 /// Timer ticks of one slot (250 us at 2 MHz).
 pub const SLOT_TICKS: u16 = 500;
 
-/// One conversion as the board read it.
+/// One conversion as the board read it. `repr(C)`: `__sense_process` reads it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct AdcSample {
     /// X code, offset binary 0..=4095.
     pub x: u16,
@@ -96,8 +97,10 @@ pub struct ServoView {
     pub loops: u32,
 }
 
-/// How to run, from the host's [`SensingConfig`] record.
+/// How to run, from the host's [`SensingConfig`] record. `repr(C)`: `__sense_process`
+/// reads it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Config {
     /// `sensing_options` bits.
     pub options: u32,
@@ -238,16 +241,34 @@ impl Output {
     }
 }
 
-/// A conversion in flight: beacon, strobe time (us), ticks it was lit for.
+/// A conversion in flight: strobe time (us), ticks it was lit for, beacon. `repr(C)`:
+/// `__sense_process` reads it at the offsets [`layout`] asserts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 struct Conversion {
-    beacon: u8,
     t_us: u32,
     lit_ticks: u16,
+    beacon: u8,
 }
 
-/// The sensing board's state.
+/// The sensing board's state. `repr(C)`, the fields the common slot's assembly
+/// (`__sense_process`) uses first, at the offsets [`layout`] asserts (the same on the host
+/// and the 68020: no field there needs padding).
+#[repr(C)]
 pub struct Sensing {
+    filters: [Filter; BEACONS],
+    /// The object table to publish.
+    pub objects: ObjectTable,
+    /// The raw signal table to publish.
+    pub raw: RawTable,
+    /// The drift estimate.
+    pub drift: Drift,
+    config: Config,
+    /// The raw codes of the last processed sample (for the crosstalk correction).
+    prev_raw: [i32; 2],
+    levels: [u16; BEACONS],
+    /// The beacon lit after the last processed sample's (8 before any sample: none is).
+    prev_next: u8,
     started: bool,
     last_timer: u16,
     slot_timer: u16,
@@ -256,26 +277,13 @@ pub struct Sensing {
     lit: Option<u8>,
     converting: Option<Conversion>,
     sampled: Option<Conversion>,
-    /// The beacon lit after the last processed sample's (8 before any sample: none is),
-    /// and that sample's raw codes (for the crosstalk correction).
-    prev_next: u8,
-    prev_raw: [i32; 2],
-    levels: [u16; BEACONS],
-    filters: [Filter; BEACONS],
-    config: Config,
     /// The calibration table check.
     pub checker: Checker,
-    /// The drift estimate.
-    pub drift: Drift,
     rest: u16,
     rest_theta: [i32; 2],
     servo_loops: u32,
     servo_same: u16,
     servo_stale: bool,
-    /// The object table to publish.
-    pub objects: ObjectTable,
-    /// The raw signal table to publish.
-    pub raw: RawTable,
 }
 
 impl Default for Sensing {
@@ -386,7 +394,8 @@ impl Sensing {
         if let Some(c) = input.config {
             self.config = c;
         }
-        let (Some(conv), Some(s)) = (self.sampled.take(), input.sample) else {
+        // By reference: the sample is not copied (the 68020's slot budget).
+        let (Some(conv), Some(s)) = (self.sampled.take(), &input.sample) else {
             return out;
         };
         let ev = self.process(conv, s, input.servo, cal);
@@ -398,10 +407,52 @@ impl Sensing {
     fn process(
         &mut self,
         conv: Conversion,
-        s: AdcSample,
+        s: &AdcSample,
         servo: Option<ServoView>,
         cal: &mut impl CalWords,
     ) -> u32 {
+        // On the 68020 the common slot (a well-lit, unsaturated sample with a checked table
+        // mapped in global RAM) is one call of the runtime's assembly, bit-identical to the
+        // Rust below (`tests/tests/sensing.rs` compares the image with the host slot by
+        // slot); the rest takes the Rust.
+        #[cfg(target_arch = "m68k")]
+        if let (Some(base), Some(h)) = (cal.base(), self.checker.header_ref()) {
+            extern "C" {
+                fn __sense_process(
+                    s: *mut u8,
+                    conv: *const Conversion,
+                    sample: *const AdcSample,
+                    inv: *const u32,
+                    area_um: *const i32,
+                    out: *mut filter::Estimate,
+                    tables: *const Tables,
+                ) -> u32;
+            }
+            let area = h.area_um.as_ptr();
+            let mut e = filter::Estimate::default();
+            // SAFETY: the routine reads and writes only `*self` and `e` at the offsets
+            // `layout` asserts, reads `conv`, `s`, the area, the tables, and the inverse
+            // grid's cell at the clamped signals (`base` maps the whole table: the checker
+            // read every word). It changes nothing when it returns 2.
+            let r = unsafe {
+                __sense_process(
+                    self as *mut Sensing as *mut u8,
+                    &conv,
+                    s,
+                    base.add(vme_map::records::cal::INV as usize),
+                    area,
+                    &mut e,
+                    &TABLES,
+                )
+            };
+            if r != 2 {
+                return if conv.beacon as usize & 7 == beacon_index::TIP {
+                    self.reference((r != 0).then_some(e), servo, cal)
+                } else {
+                    0
+                };
+            }
+        }
         let b = conv.beacon as usize & 7;
         let raw = [s.x as i32 - 2048, s.y as i32 - 2048];
         let sum = s.sum as i32 - 2048;
@@ -558,6 +609,75 @@ impl Sensing {
     }
 }
 
+/// The constant tables the common slot's assembly reads (`__sense_process`): one pointer
+/// for both.
+#[repr(C)]
+struct Tables {
+    /// [`filter::RECIP_Q16`].
+    recip_q16: [i32; filter::LONG + 1],
+    /// [`CROSSTALK_Q16`].
+    crosstalk_q16: [i32; 32],
+}
+
+/// The one copy of [`Tables`] (a static: the assembly takes its address).
+#[cfg_attr(not(target_arch = "m68k"), allow(dead_code))]
+static TABLES: Tables = Tables {
+    recip_q16: filter::RECIP_Q16,
+    crosstalk_q16: CROSSTALK_Q16,
+};
+
+/// Byte offsets of the fields `__sense_process` (`crates/rt/asm/rt.S`) uses, as its `.set`
+/// lines name them: checked here at compile time, on the host and the 68020 alike.
+pub mod layout {
+    use super::{AdcSample, Config, Conversion, Sensing, Tables};
+    use core::mem::{offset_of, size_of};
+    use vme_map::records::{Beacon, ObjectTable, RawBeacon, RawTable};
+    const _: () = assert!(offset_of!(Sensing, filters) == 0);
+    const _: () = assert!(size_of::<super::Filter>() == super::filter::layout::FILTER_BYTES);
+    const _: () = assert!(offset_of!(Sensing, objects) == 8384);
+    const _: () = assert!(offset_of!(ObjectTable, frame) == 0);
+    const _: () = assert!(offset_of!(ObjectTable, beacons) == 4);
+    const _: () = assert!(size_of::<Beacon>() == 16);
+    const _: () = assert!(offset_of!(Beacon, x_um) == 0);
+    const _: () = assert!(offset_of!(Beacon, y_um) == 4);
+    const _: () = assert!(offset_of!(Beacon, t_us) == 8);
+    const _: () = assert!(offset_of!(Beacon, flags) == 12);
+    const _: () = assert!(offset_of!(Sensing, raw) == 8516);
+    const _: () = assert!(offset_of!(RawTable, frame) == 0);
+    const _: () = assert!(offset_of!(RawTable, beacons) == 4);
+    const _: () = assert!(size_of::<RawBeacon>() == 16);
+    const _: () = assert!(offset_of!(RawBeacon, x_q5) == 0);
+    const _: () = assert!(offset_of!(RawBeacon, y_q5) == 4);
+    const _: () = assert!(offset_of!(RawBeacon, sum_codes) == 8);
+    const _: () = assert!(offset_of!(RawBeacon, level_ma) == 12);
+    const _: () = assert!(offset_of!(Sensing, drift) == 8648);
+    const _: () = assert!(offset_of!(super::Drift, observations) == 16);
+    const _: () = assert!(offset_of!(Sensing, config) == 8668);
+    const _: () = assert!(offset_of!(Config, options) == 0);
+    const _: () = assert!(offset_of!(Config, s_ref_codes) == 4);
+    const _: () = assert!(offset_of!(Config, level_ma) == 8);
+    const _: () = assert!(offset_of!(Sensing, prev_raw) == 8680);
+    const _: () = assert!(offset_of!(Sensing, levels) == 8688);
+    const _: () = assert!(offset_of!(Sensing, prev_next) == 8704);
+    const _: () = assert!(offset_of!(Conversion, t_us) == 0);
+    const _: () = assert!(offset_of!(Conversion, lit_ticks) == 4);
+    const _: () = assert!(offset_of!(Conversion, beacon) == 6);
+    const _: () = assert!(offset_of!(AdcSample, x) == 0);
+    const _: () = assert!(offset_of!(AdcSample, y) == 2);
+    const _: () = assert!(offset_of!(AdcSample, sum) == 4);
+    const _: () = assert!(offset_of!(AdcSample, over) == 6);
+    const _: () = assert!(offset_of!(Tables, recip_q16) == 0);
+    const _: () = assert!(offset_of!(Tables, crosstalk_q16) == 1028);
+    // The flag and option bits the assembly sets and tests.
+    use vme_map::records::{beacon_flags as bf, sensing_options as opt};
+    const _: () = assert!(bf::VALID == 1 && bf::CORRECTED == 8 && bf::EXTRAPOLATED == 32);
+    const _: () = assert!(bf::FILLING == 64 && bf::MOVING == 128 && bf::SAMPLES_SHIFT == 8);
+    const _: () = assert!(opt::CURRENT_FEEDBACK == 1 && opt::DRIFT_REFERENCE == 2);
+    const _: () = assert!(opt::ADAPTIVE_FILTER == 4 && opt::CROSSTALK == 8);
+    const _: () = assert!(super::OCCLUDED_BELOW_CODES == 205);
+    const _: () = assert!(super::LEVEL_MIN_MA == 50 && super::LEVEL_MAX_MA == 1000);
+}
+
 /// Where this slot sits on the grid: `due` if it is less than a whole slot late (and the
 /// grid has started), else `timer` (the grid restarts). By masks: the select this was
 /// compiled to clobbered its compare's flags on the 68k (docs/toolchain.md class 1).
@@ -570,13 +690,20 @@ fn next_grid(due: u16, timer: u16, started: bool) -> u16 {
 
 /// One strobe slot from eight scripted words, for the image-against-host test (the image's
 /// probe and the host run this same function): `w` = timer; x, y and sum codes; flags (bit
-/// 0: a sample was read, bit 1: it was over range, bit 2: a servo state was read); link 1
-/// and link 2 angles (micro-radians); the servo's loop count. Writes to `out`: the next
+/// 0: a sample was read, bit 1: it was over range, bit 2: a servo state was read, bit 3: a
+/// configuration was read, with the options in bits 8..12 and the fixed drive 50 + bits
+/// 12..22 mA); link 1 and link 2 angles (micro-radians); the servo's loop count. Writes to `out`: the next
 /// beacon, its drive level, the processed beacon (8: none), the event code, and the
-/// processed beacon's x_um, y_um, flags, raw x_q5 and raw y_q5 (all -1 when no slot was
-/// due).
-pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out: &mut [i32; 9]) {
-    *out = [-1; 9];
+/// processed beacon's x_um, y_um, flags, raw x_q5, raw y_q5, timestamp, sum codes and
+/// recorded level, then the frame counters of the object and raw tables (all -1 when no
+/// slot was due): [`SCRIPT_OUT_WORDS`] words.
+pub fn scripted_slot(
+    s: &mut Sensing,
+    w: &[u32; 8],
+    cal: &mut impl CalWords,
+    out: &mut [i32; SCRIPT_OUT_WORDS],
+) {
+    *out = [-1; SCRIPT_OUT_WORDS];
     let Some(slot) = s.slot(w[0] as u16) else {
         return;
     };
@@ -591,10 +718,15 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
         theta_urad: [w[5] as i32, w[6] as i32],
         loops: w[7],
     });
+    let config = (f & 8 != 0).then(|| Config {
+        options: (f >> 8) & 0xF,
+        s_ref_codes: DEFAULT_S_REF_CODES,
+        level_ma: 50 + ((f >> 12) & 0x3FF) as i32,
+    });
     let input = Input {
         sample,
         servo,
-        config: None,
+        config,
     };
     let o = s.step(&input, cal);
     let b = o.beacon.map_or(8, |b| b as usize);
@@ -608,6 +740,11 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
         0,
         0,
         0,
+        0,
+        0,
+        0,
+        s.objects.frame as i32,
+        s.raw.frame as i32,
     ];
     if b < BEACONS {
         let r = s.objects.beacons[b];
@@ -617,8 +754,14 @@ pub fn scripted_slot(s: &mut Sensing, w: &[u32; 8], cal: &mut impl CalWords, out
         out[6] = r.flags as i32;
         out[7] = raw.x_q5;
         out[8] = raw.y_q5;
+        out[9] = r.t_us as i32;
+        out[10] = raw.sum_codes;
+        out[11] = raw.level_ma as i32;
     }
 }
+
+/// Words [`scripted_slot`] writes per slot.
+pub const SCRIPT_OUT_WORDS: usize = 14;
 
 /// The task-space position (micrometres) of filtered signals `v_q5`: the drift removed
 /// when `correct` is 1 ([`Drift::correct`]; 0: not), then the inverse grid ([`cal::position_um`]);
