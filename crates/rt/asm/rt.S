@@ -884,6 +884,19 @@ __sense_locate:
  * Bit-identical (tests/tests/firmware_functions.rs). */
     .set    LEVEL_MIN, 50           /* sensing::LEVEL_MIN_MA */
     .set    LEVEL_MAX, 1000         /* sensing::LEVEL_MAX_MA (the driver's maximum) */
+/* d0 clamped to LEVEL_MIN..LEVEL_MAX by the signs of the wrapped differences (d1 used):
+ * here and in __sense_process */
+.macro CLAMP_LEVEL
+    move.l  %d0, %d1
+    subi.l  #LEVEL_MIN, %d1
+    bpl.s   201f
+    moveq   #LEVEL_MIN, %d0
+201: move.l  #LEVEL_MAX, %d1
+    sub.l   %d0, %d1
+    bpl.s   202f
+    move.l  #LEVEL_MAX, %d0
+202:
+.endm
     .section .text.__sense_feedback, "ax"
     .globl __sense_feedback
 __sense_feedback:
@@ -896,15 +909,8 @@ __sense_feedback:
     bge.s   1f
     moveq   #1, %d1
 1:  divs.l  %d1, %d0
-    move.l  %d0, %d1
-    subi.l  #LEVEL_MIN, %d1
-    bpl.s   2f
-    moveq   #LEVEL_MIN, %d0
-2:  move.l  #LEVEL_MAX, %d1
-    sub.l   %d0, %d1
-    bpl.s   3f
-    move.l  #LEVEL_MAX, %d0
-3:  rts
+    CLAMP_LEVEL
+    rts
 
 /* ---- the sensing board's common slot (crates/sensing: Sensing::process) ----
  * u32 __sense_process(Sensing *s, const Conversion *c, const AdcSample *smp, const i32 *inv,
@@ -1018,21 +1024,14 @@ __sense_process:
     /* the LED feedback: level s_ref / sum clamped, or the fixed level */
     lea     S_LEVELS(%a5,%d7.l*2), %a0
     btst    #0, S_OPT+3(%a5)        /* sensing_options::CURRENT_FEEDBACK */
-    beq.s   5f
-    moveq   #0, %d0
+    bne.s   4f
+    move.l  S_LEVEL(%a5), %d0
+    bra.s   6f
+4:  moveq   #0, %d0
     move.w  (%a0), %d0
     muls.l  S_SREF(%a5), %d0
     divs.l  %d6, %d0                /* sum >= 205 here */
-    move.l  %d0, %d1                /* the clamps by the wrapped differences' signs, */
-    subi.l  #LEVEL_MIN, %d1         /* as __sense_feedback */
-    bpl.s   4f
-    moveq   #LEVEL_MIN, %d0
-4:  move.l  #LEVEL_MAX, %d1
-    sub.l   %d0, %d1
-    bpl.s   6f
-    move.l  #LEVEL_MAX, %d0
-    bra.s   6f
-5:  move.l  S_LEVEL(%a5), %d0
+    CLAMP_LEVEL                     /* as __sense_feedback */
 6:  move.w  %d0, (%a0)
     /* the raw record */
     move.l  %d7, %d1
