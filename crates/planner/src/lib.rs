@@ -447,8 +447,13 @@ impl Planner {
         let slow = masks::lt(masks::abs(omega_urad_s[0]), SLOW_URAD_S)
             & masks::lt(masks::abs(omega_urad_s[1]), SLOW_URAD_S);
         let held = held_axes & slow;
+        // A pass the reflex held the arm on a bad input (`HOLD`: the arm at its arrest point)
+        // neither starts nor ends the time held: as images the reflex holds on the C-space
+        // board's slow passes a fifth of the time, and each hold restarted that clock, so an
+        // arm at a wall waited out its approach (fig. VI.5 went round the other elbow).
+        let hold = (((flags >> rf::HOLD.trailing_zeros()) & 1) as i32).wrapping_neg();
         self.held_since_us =
-            masks::pick(held, self.held_since_us as i32, self.now_us as i32) as u32;
+            masks::pick(held | hold, self.held_since_us as i32, self.now_us as i32) as u32;
         let held_long = masks::lt(
             BLOCKED_US as i32,
             self.now_us.wrapping_sub(self.held_since_us) as i32,
@@ -466,8 +471,13 @@ impl Planner {
         (settled & (stalled | no_progress | held_long) & away & 1) as u32
     }
 
-    /// A new goal from the wand: its two poses; the pose the last fill reached (nearest the
-    /// arm among equals); the approach starts over if the goal moved by more than a cell.
+    /// A new goal from the wand: its two poses; the approach starts over, from the pose the
+    /// last fill reached (nearest the arm among equals), if the goal of the pose being
+    /// approached moved by more than a cell. A smaller move (the wand's noise: its published
+    /// position jitters by up to 3 mm at rest, more than [`WAND_MOVE_UM`]) keeps the
+    /// approach and its pose: choosing the pose again there flipped an approach on the
+    /// other elbow back to the first, which counted as a jump and restarted the approaches
+    /// (fig. VI.5 as images missed its goal so).
     fn new_goal(&mut self, w: [i32; 2], theta: [i32; 2]) {
         let had = self.has_goal;
         let old = cell_of(self.target());
@@ -476,10 +486,11 @@ impl Planner {
         self.poses = poses;
         self.pose_cells = [cell_of(poses[0]), cell_of(poses[1])];
         self.has_goal = true;
-        self.base_pose = self.pick_pose(&poses, theta);
-        self.pose = self.base_pose;
-        let new = cell_of(self.target());
-        let jump = !had || cheb(old, new) > 1;
+        let jump = !had || cheb(old, cell_of(self.target())) > 1;
+        if jump || self.mode == Mode::Idle {
+            self.base_pose = self.pick_pose(&poses, theta);
+            self.pose = self.base_pose;
+        }
         if jump && self.mode != Mode::Idle {
             // Keep the approach's image offsets relative to where the arm is now.
             self.start_approach(0, theta);

@@ -115,7 +115,8 @@ pub const AT_GOAL_URAD: i32 = 1_600;
 /// A servo state that did not change over this many passes is stale.
 pub const SERVO_STALE_PASSES: u32 = 20;
 /// The wand's goal is recomputed when the wand moves by more than this (each axis),
-/// micrometres: below the sensing board's accuracy (issue 6: 0.9 mm rms).
+/// micrometres: about the sensing board's accuracy (issue 6: 0.9 mm rms; a resting wand's
+/// position jitters by 1-3 mm peak to peak, so noise moves the goal now and then).
 pub const WAND_MOVE_UM: i32 = 1_000;
 /// A planner goal record unchanged for this long is stale: the reflex stops advancing.
 pub const PLANNER_STALE_US: u32 = 50_000;
@@ -415,7 +416,9 @@ impl Reflex {
             }
             GoalInput::Wand { x_um, y_um } => {
                 // The inverse kinematics (a fifth of a pass on the 68020) only when the wand
-                // moved by more than [`WAND_MOVE_UM`]: its resting noise is below that.
+                // moved by more than [`WAND_MOVE_UM`] (its published position jitters by 1-3 mm
+                // at rest, so noise recomputes it now and then: the planner keeps its approach
+                // through such small moves, docs/planner.md).
                 let [px, py] = self.wand_um;
                 if self.goal.is_none()
                     || masks::abs(x_um - px) > WAND_MOVE_UM
