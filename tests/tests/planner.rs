@@ -68,10 +68,18 @@ fn run_figure(file: &str) -> (u32, u32, bool, u64) {
 
 /// [`run_figure`] and the wall-following episodes the planner began.
 fn run_figure_walls(file: &str) -> (u32, u32, bool, u64, u32) {
+    run_figure_seeded(file, None)
+}
+
+/// [`run_figure_walls`] with the simulation's seed (its noise) replaced by `seed`.
+fn run_figure_seeded(file: &str, seed: Option<u64>) -> (u32, u32, bool, u64, u32) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../sim-host/scenarios")
         .join(file);
-    let sc = sim_host::scenario::Scenario::load(&path).unwrap();
+    let mut sc = sim_host::scenario::Scenario::load(&path).unwrap();
+    if let Some(seed) = seed {
+        sc.config.seed = seed;
+    }
     let (wx, wy) = sc.config.wand.at(sc.config.duration_s).unwrap();
     let mut sim = sim_host::sim::Sim::new(sc.config);
     let (mut flags, mut modes, mut walls, mut was_wall) = (0, 0, 0, false);
@@ -104,7 +112,9 @@ fn run_figure_walls(file: &str) -> (u32, u32, bool, u64, u32) {
 /// Fig. VI.2: with the thesis's leave rule (a clear straight line of sight releases the arm)
 /// the released arm's real path runs back into the wall it left, and the planner loops
 /// there for the whole run; with ours (the servo's real path must be clear) the same scene
-/// is one wall-following episode to the goal.
+/// is two wall-following episodes to the goal. Over nine noise seeds ours always reaches the
+/// goal so, and the thesis's rule loops for the whole run under several of them (the loop
+/// is not one seed's accident; under others the noise shakes the arm out, sooner or later).
 #[test]
 fn line_of_sight_loops_in_fig_vi_2_and_the_real_trajectory_does_not() {
     let (_, _, reached, hits, walls) = run_figure_walls("fig_vi_2_loop.toml");
@@ -117,6 +127,22 @@ fn line_of_sight_loops_in_fig_vi_2_and_the_real_trajectory_does_not() {
         "ours: reached {reached}, {hits} contacts"
     );
     assert!(walls <= 2, "{walls} wall-following episodes");
+    let mut loops = 0;
+    for seed in 1..=9 {
+        let (_, _, reached, hits, walls) =
+            run_figure_seeded("fig_vi_2_trajectory.toml", Some(seed));
+        assert!(
+            reached && hits == 0 && walls <= 2,
+            "ours, seed {seed}: reached {reached}, {hits} contacts, {walls} episodes"
+        );
+        let (_, _, reached, hits, walls) = run_figure_seeded("fig_vi_2_loop.toml", Some(seed));
+        assert_eq!(hits, 0, "the thesis's rule, seed {seed}");
+        loops += (!reached && walls >= 10) as u32;
+    }
+    assert!(
+        loops >= 3,
+        "the thesis's rule looped under {loops} of 9 seeds"
+    );
 }
 
 /// Figs. VI.3-VI.5: free motion with neither layer stepping in; the reflexes diverting the
