@@ -8,6 +8,7 @@
 //! with [`servo::REGISTERS`] and [`sensing::REGISTERS`].
 #![no_std]
 #![deny(missing_docs)]
+#![cfg_attr(target_arch = "m68k", feature(asm_experimental_arch))]
 
 pub mod sensing;
 pub mod servo;
@@ -96,13 +97,23 @@ impl MmioIo {
 impl IoBus for MmioIo {
     #[inline(always)]
     fn read16(&mut self, off: u32) -> u16 {
-        extern "C" {
-            // One MOVE.W in the runtime's assembly (crates/rt/asm/rt.S): a volatile read here
-            // was miscompiled into a 32-bit read of two registers (docs/toolchain.md).
-            fn __io_read16(addr: *const u16) -> u32;
-        }
-        // SAFETY: `new`'s contract; offsets come from this crate's tables.
-        unsafe { __io_read16((PRIVATE_IO_BASE + off) as *const u16) as u16 }
+        // One MOVE.W, spelled out: LLVM's M68k backend selected a zero-extended 16-bit
+        // volatile read from an absolute address as MOVE.L, reading two registers
+        // (docs/toolchain.md, class 10). A call of an assembly routine did the same at about
+        // 50 cycles a read; this is one instruction.
+        let v: u16;
+        // SAFETY: `new`'s contract; offsets come from this crate's tables. The instruction
+        // reads the one register and writes only `v` (and the condition codes, which the
+        // compiler takes as clobbered: no `preserves_flags`).
+        unsafe {
+            core::arch::asm!(
+                "move.w ({a}), {v}",
+                a = in(reg_addr) (PRIVATE_IO_BASE + off) as *const u16,
+                v = out(reg_data) v,
+                options(nostack, readonly),
+            )
+        };
+        v
     }
     #[inline(always)]
     fn write16(&mut self, off: u32, val: u16) {

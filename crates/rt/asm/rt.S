@@ -202,19 +202,6 @@ bcmp:
     rts
 
 /* ---- indivisible compare-and-swap on global RAM (vme-map's GlobalBus::cas_u32) ---- */
-/* ---- a 16-bit register of the private I/O (regs' MmioIo::read16) ----
- * u32 __io_read16(const u16 *addr): one MOVE.W of the register, zero-extended. In assembly
- * because LLVM's M68k backend selected a zero-extending 16-bit volatile load from an
- * absolute address as MOVE.L: the servo read ENC0 and ENC1 as one long and took link 2's
- * counter for link 1 (found by image mode, docs/toolchain.md). */
-    .section .text.__io_read16, "ax"
-    .globl __io_read16
-__io_read16:
-    movea.l 4(%sp), %a0
-    moveq   #0, %d0
-    move.w  (%a0), %d0
-    rts
-
     .section .text.__vme_cas32, "ax"
     .globl __vme_cas32
 __vme_cas32:                    /* u32 __vme_cas32(u32 *addr, u32 current, u32 new): value found */
