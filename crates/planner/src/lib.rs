@@ -206,6 +206,9 @@ pub struct Planner {
     /// Free mode: the nearest the arm came to the goal (squared cells), and when.
     best_d2: i32,
     best_since_us: u32,
+    /// Free mode: the time of the last stall check (a fault hold stops the progress clock
+    /// for the time since).
+    stall_pass_us: u32,
     /// Free mode: since when the arm has been held at walls.
     held_since_us: u32,
     /// A fill has been started.
@@ -288,6 +291,7 @@ impl Planner {
             last_request: [0; 2],
             best_d2: i32::MAX,
             best_since_us: 0,
+            stall_pass_us: 0,
             held_since_us: 0,
             filling: false,
             tick: 0,
@@ -318,6 +322,7 @@ impl Planner {
         self.mode_since_us = self.now_us;
         self.best_d2 = i32::MAX;
         self.best_since_us = self.now_us;
+        self.stall_pass_us = self.now_us;
     }
 
     /// One planner cycle.
@@ -424,8 +429,21 @@ impl Planner {
         let d = d2(arm, goal);
         let better = masks::lt(d, self.best_d2);
         self.best_d2 = masks::pick(better, d, self.best_d2);
-        self.best_since_us =
-            masks::pick(better, self.now_us as i32, self.best_since_us as i32) as u32;
+        // A pass the reflex held the arm on a bad input (`HOLD`: the arm at its arrest point)
+        // is no evidence of a wall: the clock of time without progress stops for it (its
+        // start moves on by the pass). As images the reflex holds on the C-space board's slow
+        // passes a fifth of the time; an arm held short of the wall ran out that clock, found
+        // no wall ahead and went on to the next approach (fig. VI.5 went round the wall's far
+        // end). Restarting the clock instead kept an arm at the wall from ever stalling.
+        let hold = (((flags >> rf::HOLD.trailing_zeros()) & 1) as i32).wrapping_neg();
+        let pass_us = self.now_us.wrapping_sub(self.stall_pass_us);
+        self.stall_pass_us = self.now_us;
+        let paused = masks::pick(
+            hold,
+            self.best_since_us.wrapping_add(pass_us) as i32,
+            self.best_since_us as i32,
+        );
+        self.best_since_us = masks::pick(better, self.now_us as i32, paused) as u32;
         let since_best = self.now_us.wrapping_sub(self.best_since_us) as i32;
         let since_mode = self.now_us.wrapping_sub(self.mode_since_us) as i32;
         let no_progress = masks::lt(PROGRESS_US as i32, since_best);
@@ -447,11 +465,8 @@ impl Planner {
         let slow = masks::lt(masks::abs(omega_urad_s[0]), SLOW_URAD_S)
             & masks::lt(masks::abs(omega_urad_s[1]), SLOW_URAD_S);
         let held = held_axes & slow;
-        // A pass the reflex held the arm on a bad input (`HOLD`: the arm at its arrest point)
-        // neither starts nor ends the time held: as images the reflex holds on the C-space
-        // board's slow passes a fifth of the time, and each hold restarted that clock, so an
+        // A fault hold neither starts nor ends the time held: each restarted that clock, so an
         // arm at a wall waited out its approach (fig. VI.5 went round the other elbow).
-        let hold = (((flags >> rf::HOLD.trailing_zeros()) & 1) as i32).wrapping_neg();
         self.held_since_us =
             masks::pick(held | hold, self.held_since_us as i32, self.now_us as i32) as u32;
         let held_long = masks::lt(

@@ -423,3 +423,38 @@ fn fault_holds_do_not_restart_the_time_held_at_a_wall() {
         "stalled after {ms} ms"
     );
 }
+
+/// An arm the reflex holds on a bad input (`HOLD`, the C-space map stale or torn) short of
+/// the goal, with no wall near, has not stalled: the clock of time without progress stops
+/// while it is held and runs on after (an arm held so went on to its next approach, round the
+/// wall's far end, in fig. VI.5 as images). Here 200 ms without progress, 500 ms held, then
+/// the last 100 ms of `PROGRESS_US`.
+#[test]
+fn a_fault_hold_stops_the_progress_clock() {
+    let mut p = Planner::new();
+    let arm = [20, 30];
+    let theta = centre_urad(arm);
+    p.new_goal(wand_for([70, 90]), theta);
+    p.now_us = 100_000;
+    p.set_mode(Mode::Free);
+    let goal = cell_of(p.target());
+    let mut fired = None;
+    for ms in 0..1_500u32 {
+        p.now_us = 100_000 + ms * 1000;
+        let flags = if (200..700).contains(&ms) {
+            rf::FROM_PLANNER | rf::HOLD
+        } else {
+            rf::FROM_PLANNER
+        };
+        if p.free_stall(arm, goal, flags, &[0, 0]) == 1 {
+            fired = Some(ms);
+            break;
+        }
+    }
+    let ms = fired.expect("no progress after the hold is a stall");
+    let want = 500 + PROGRESS_US / 1000;
+    assert!(
+        (want..=want + 2).contains(&ms),
+        "stalled after {ms} ms, not {want}"
+    );
+}
