@@ -206,7 +206,30 @@ enum Cmd {
     },
 }
 
+/// The exit status when standard output's reader has gone (128 + SIGPIPE, what a shell
+/// reports for a program a closed pipe ended).
+const CLOSED_STDOUT_EXIT: i32 = 141;
+
+/// A closed standard output (`sim-host run ... | head -1`) ends the program quietly with
+/// [`CLOSED_STDOUT_EXIT`], as command-line tools end, instead of `println!`'s panic and
+/// backtrace. Every other panic reports as before. (SIGPIPE stays ignored, Rust's default:
+/// the live monitor's closed sockets stay errors it handles, not a signal that kills it.)
+fn end_quietly_on_closed_stdout() {
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info.payload_as_str().unwrap_or("");
+        // "failed printing to stdout: Broken pipe (os error 32)"
+        if msg.starts_with("failed printing to stdout")
+            && msg.to_ascii_lowercase().contains("broken pipe")
+        {
+            std::process::exit(CLOSED_STDOUT_EXIT);
+        }
+        report(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    end_quietly_on_closed_stdout();
     let cli = Cli::parse();
     match cli.cmd {
         Cmd::Run { scenario, run } => match Scenario::load(&scenario) {
