@@ -417,8 +417,8 @@ impl Reflex {
             GoalInput::Wand { x_um, y_um } => {
                 // The inverse kinematics (a fifth of a pass on the 68020) only when the wand
                 // moved by more than [`WAND_MOVE_UM`] (its published position jitters by 1-3 mm
-                // at rest, so noise recomputes it now and then: the planner keeps its approach
-                // through such small moves, docs/planner.md).
+                // at rest, so noise recomputes it now and then; the planner restarts its
+                // approaches only when its goal jumps by more than a cell, docs/planner.md).
                 let [px, py] = self.wand_um;
                 if self.goal.is_none()
                     || masks::abs(x_um - px) > WAND_MOVE_UM
