@@ -616,9 +616,17 @@ impl Planner {
                     self.start_approach(0, theta);
                 }
             }
-            if let Mode::Unreachable(_) = self.mode {
-                let theta = self.hold_urad;
-                self.start_approach(0, theta);
+            // A goal given up after every approach (`CYCLED`) is taken up again only when
+            // a fill finds a way to a pose with the planner's clearance: where the only way
+            // passes within a pixel of an obstacle (the fill through the marked pixels gets
+            // there, the planner's moves cannot), taking it up again went round every
+            // approach again, for ever (a case `reaches_every_reachable_goal` found).
+            if let Mode::Unreachable(why) = self.mode {
+                let clear = self.fill.reached_clear(cells[0]) | self.fill.reached_clear(cells[1]);
+                if why != reason::CYCLED || clear & 1 != 0 {
+                    let theta = self.hold_urad;
+                    self.start_approach(0, theta);
+                }
             }
             return;
         }

@@ -391,36 +391,52 @@ fn a_wall_six_cells_ahead_is_a_hit_point() {
     assert_eq!((p.mode, p.approach), (Mode::Wall, 0));
 }
 
+/// A planner in free mode since 100 ms, the arm at `arm`, the wand's goal at cell (70, 90):
+/// the planner and its goal cell.
+fn free_at(arm: [i32; 2]) -> (Planner, [i32; 2]) {
+    let mut p = Planner::new();
+    p.new_goal(wand_for([70, 90]), centre_urad(arm));
+    p.now_us = 100_000;
+    p.set_mode(Mode::Free);
+    let goal = cell_of(p.target());
+    (p, goal)
+}
+
+/// The first of `n` millisecond passes (from 100 ms) at which the free-mode stall check of an
+/// arm at rest at `arm` fires, with the reflex's flags of each pass from `flags`.
+fn first_stall(
+    p: &mut Planner,
+    arm: [i32; 2],
+    goal: [i32; 2],
+    n: u32,
+    flags: impl Fn(u32) -> u32,
+) -> Option<u32> {
+    (0..n).find(|&ms| {
+        p.now_us = 100_000 + ms * 1000;
+        p.free_stall(arm, goal, flags(ms), &[0, 0]) == 1
+    })
+}
+
 /// An arm held at a wall (both axes blocked, at rest, short of the goal) counts as stalled
 /// after `BLOCKED_US` even when the reflex's fault holds (`HOLD`, the arm at its arrest point)
 /// come between the blocked passes, as they do a fifth of the time as images; the time held
 /// is not restarted by them (it was, and the arm waited out `PROGRESS_US` instead).
 #[test]
 fn fault_holds_do_not_restart_the_time_held_at_a_wall() {
-    let mut p = Planner::new();
     let arm = [20, 30];
-    let theta = centre_urad(arm);
-    p.new_goal(wand_for([70, 90]), theta);
-    p.mode = Mode::Free;
-    let goal = cell_of(p.target());
+    let (mut p, goal) = free_at(arm);
     let blocked = rf::FROM_PLANNER | rf::BLOCKED1 | rf::BLOCKED2;
-    let mut fired = None;
-    for ms in 0..400u32 {
-        p.now_us = 100_000 + ms * 1000;
-        // Moving freely at first; then 30 ms blocked, 20 ms held on a fault: never 60 ms
-        // blocked in a row.
-        let flags = if ms == 0 {
+    // Moving freely at first; then 30 ms blocked, 20 ms held on a fault: never 60 ms
+    // blocked in a row.
+    let fired = first_stall(&mut p, arm, goal, 400, |ms| {
+        if ms == 0 {
             rf::FROM_PLANNER
         } else if ms % 50 < 30 {
             blocked
         } else {
             rf::HOLD
-        };
-        if p.free_stall(arm, goal, flags, &[0, 0]) == 1 {
-            fired = Some(ms);
-            break;
         }
-    }
+    });
     let ms = fired.expect("the stall is seen");
     assert!(
         (BLOCKED_US / 1000..PROGRESS_US / 1000).contains(&ms),
@@ -435,26 +451,15 @@ fn fault_holds_do_not_restart_the_time_held_at_a_wall() {
 /// the last 100 ms of `PROGRESS_US`.
 #[test]
 fn a_fault_hold_stops_the_progress_clock() {
-    let mut p = Planner::new();
     let arm = [20, 30];
-    let theta = centre_urad(arm);
-    p.new_goal(wand_for([70, 90]), theta);
-    p.now_us = 100_000;
-    p.set_mode(Mode::Free);
-    let goal = cell_of(p.target());
-    let mut fired = None;
-    for ms in 0..1_500u32 {
-        p.now_us = 100_000 + ms * 1000;
-        let flags = if (200..700).contains(&ms) {
+    let (mut p, goal) = free_at(arm);
+    let fired = first_stall(&mut p, arm, goal, 1_500, |ms| {
+        if (200..700).contains(&ms) {
             rf::FROM_PLANNER | rf::HOLD
         } else {
             rf::FROM_PLANNER
-        };
-        if p.free_stall(arm, goal, flags, &[0, 0]) == 1 {
-            fired = Some(ms);
-            break;
         }
-    }
+    });
     let ms = fired.expect("no progress after the hold is a stall");
     let want = 500 + PROGRESS_US / 1000;
     assert!(
