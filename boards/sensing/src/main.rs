@@ -24,8 +24,8 @@ fn main() -> ! {
 
 /// Test probe (never called by the board): runs a fresh sensing logic over `n` strobe slots
 /// of scripted inputs, eight words each, with the calibration table in global RAM, and
-/// writes `sensing::SCRIPT_OUT_WORDS` words per slot to `out` (`sensing::scripted_slot` has the format). The
-/// system tests compare it with the host.
+/// writes `sensing::SCRIPT_OUT_WORDS` words per slot to `out` (`sensing::scripted_slot` has
+/// the format). The system tests compare it with the host.
 #[no_mangle]
 #[link_section = ".text.probe.sensing_run"]
 pub extern "C" fn sensing_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> i32 {
@@ -34,7 +34,8 @@ pub extern "C" fn sensing_probe_run(inputs: *const u32, n: u32, out: *mut i32) -
     let mut g = unsafe { MmioGlobal::new() };
     let mut i = 0;
     while i < n {
-        // SAFETY: the caller passes 8 n input words and room for `SCRIPT_OUT_WORDS` n output words.
+        // SAFETY: the caller passes 8 n input words and room for `SCRIPT_OUT_WORDS` n output
+        // words.
         unsafe {
             probe_slot(
                 &mut s,
@@ -48,7 +49,8 @@ pub extern "C" fn sensing_probe_run(inputs: *const u32, n: u32, out: *mut i32) -
     0
 }
 
-/// One slot of [`sensing_probe_run`]: eight input words at `w`, `SCRIPT_OUT_WORDS` output words at `o`.
+/// One slot of [`sensing_probe_run`]: eight input words at `w`, `SCRIPT_OUT_WORDS` output
+/// words at `o`.
 ///
 /// # Safety
 /// `w` must point at 8 readable words and `o` at `sensing::SCRIPT_OUT_WORDS` writable ones.

@@ -622,8 +622,9 @@ impl Planner {
             // there, the planner's moves cannot), taking it up again went round every
             // approach again, for ever (a case `reaches_every_reachable_goal` found).
             if let Mode::Unreachable(why) = self.mode {
-                let clear = self.fill.reached_clear(cells[0]) | self.fill.reached_clear(cells[1]);
-                if why != reason::CYCLED || clear & 1 != 0 {
+                let clear = self.fill.reached_clear(cells[0]) == 1
+                    || self.fill.reached_clear(cells[1]) == 1;
+                if why != reason::CYCLED || clear {
                     let theta = self.hold_urad;
                     self.start_approach(0, theta);
                 }

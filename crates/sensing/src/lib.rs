@@ -692,8 +692,9 @@ fn next_grid(due: u16, timer: u16, started: bool) -> u16 {
 /// probe and the host run this same function): `w` = timer; x, y and sum codes; flags (bit
 /// 0: a sample was read, bit 1: it was over range, bit 2: a servo state was read, bit 3: a
 /// configuration was read, with the options in bits 8..12 and the fixed drive 50 + bits
-/// 12..22 mA); link 1 and link 2 angles (micro-radians); the servo's loop count. Writes to `out`: the next
-/// beacon, its drive level, the processed beacon (8: none), the event code, and the
+/// 12..22 mA); link 1 and link 2 angles (micro-radians); the servo's loop count. Writes to
+/// `out`: the next beacon, its drive level, the processed beacon (8: none), the event code,
+/// and the
 /// processed beacon's x_um, y_um, flags, raw x_q5, raw y_q5, timestamp, sum codes and
 /// recorded level, then the frame counters of the object and raw tables (all -1 when no
 /// slot was due): [`SCRIPT_OUT_WORDS`] words.
