@@ -82,19 +82,10 @@ fn host_run(inputs: &[u32], global: &mut [u8]) -> Vec<i32> {
     for w in inputs.chunks(8) {
         let mut o = [0; W];
         let w: &[u32; 8] = w.try_into().expect("eight words a slot");
-        sensing::scripted_slot(&mut s, w, &mut Cal(&mut g), &mut o);
+        sensing::scripted_slot(&mut s, w, &mut g, &mut o);
         out.extend_from_slice(&o);
     }
     out
-}
-
-/// The calibration table in host global RAM.
-struct Cal<'a, 'b>(&'a mut vme_map::ArrayBus<'b>);
-impl sensing::cal::CalWords for Cal<'_, '_> {
-    fn word(&mut self, i: u32) -> u32 {
-        use vme_map::GlobalBus;
-        self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
-    }
 }
 
 /// The sensing image's logic (filter, feedback, crosstalk, table lookups, drift reference,
@@ -105,6 +96,8 @@ fn the_sensing_image_steps_like_the_host() {
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
     let table = sensing_cal::model_table(&Camera::new(OpticsConfig::default(), 1));
     sensing_cal::write_table(&mut vme_map::ArrayBus::new(&mut global), &table, 3);
+    // The host starts from the same global RAM (the probe publishes into it).
+    let mut host_global = global.clone();
     let mut b = EmuBoard::new(
         BoardId::Sensing,
         &img,
@@ -134,7 +127,7 @@ fn the_sensing_image_steps_like_the_host() {
             )
         });
     assert_eq!(ret, 0);
-    let host = host_run(&inputs, &mut global);
+    let host = host_run(&inputs, &mut host_global);
     let mut seen = [0usize; 7];
     for i in 0..n as usize {
         let got: Vec<i32> = (0..W)

@@ -15,27 +15,14 @@
 use board_shell::Shell;
 use regs::sensing::{AdcStatus, SensingIo};
 use regs::IoBus;
-use sensing::cal::{CalWords, State};
+pub use sensing::cal::GlobalCal;
+use sensing::cal::State;
 use sensing::{AdcSample, Config, Event, Input, Sensing, ServoView};
 use vme_map::records::beacon_index;
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
 /// Strobe slots per heartbeat: the board beats once per strobe frame of eight beacons.
 pub const SLOTS_PER_BEAT: u32 = 8;
-
-/// The calibration table in global RAM (at `vme_map::SENSING_CAL`).
-pub struct GlobalCal<'a, G: GlobalBus>(pub &'a mut G);
-
-impl<G: GlobalBus> CalWords for GlobalCal<'_, G> {
-    #[inline(always)]
-    fn word(&mut self, i: u32) -> u32 {
-        self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
-    }
-    #[inline(always)]
-    fn base(&mut self) -> Option<*const u32> {
-        self.0.word_ptr(vme_map::SENSING_CAL)
-    }
-}
 
 /// The sensing board's state between main-loop passes.
 pub struct Board {
@@ -161,27 +148,12 @@ impl Board {
             &mut GlobalCal(g),
         );
         if let Some(b) = out.beacon {
-            // Only the processed beacon's words change (and the frame after beacon 7).
-            // Published from where the words lie (a copy of each record first cost 130
-            // cycles a slot on the 68020).
-            let i = b as usize & 7;
-            let o = &self.sensing.objects.beacons[i];
-            let base = 1 + 4 * i as u32;
-            vme_map::OBJECTS.publish_words(
-                g,
-                base,
-                &[o.x_um as u32, o.y_um as u32, o.t_us, o.flags],
-            );
-            let r = &self.sensing.raw.beacons[i];
-            vme_map::SENSING_RAW.publish_words(
-                g,
-                base,
-                &[r.x_q5 as u32, r.y_q5 as u32, r.sum_codes as u32, r.level_ma],
-            );
-            if i == 7 {
-                vme_map::OBJECTS.publish_words(g, 0, &[self.sensing.objects.frame]);
-                vme_map::SENSING_RAW.publish_words(g, 0, &[self.sensing.raw.frame]);
+            // Only the processed beacon's words change (and the frame after beacon 7); on
+            // the 68020 the common slot's assembly has published them already.
+            if !out.published {
+                self.sensing.publish(g, b);
             }
+            let i = b as usize & 7;
             if i == beacon_index::TIP {
                 self.drift_age += 1;
                 if self.drift_age >= DRIFT_EVERY_FRAMES {

@@ -23,9 +23,10 @@ fn main() -> ! {
 }
 
 /// Test probe (never called by the board): runs a fresh sensing logic over `n` strobe slots
-/// of scripted inputs, eight words each, with the calibration table in global RAM, and
-/// writes `sensing::SCRIPT_OUT_WORDS` words per slot to `out` (`sensing::scripted_slot` has
-/// the format). The system tests compare it with the host.
+/// of scripted inputs, eight words each, with the calibration table in global RAM (and the
+/// object and raw tables published there), and writes `sensing::SCRIPT_OUT_WORDS` words per
+/// slot to `out` (`sensing::scripted_slot` has the format). The system tests compare it with
+/// the host.
 #[no_mangle]
 #[link_section = ".text.probe.sensing_run"]
 pub extern "C" fn sensing_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> i32 {
@@ -64,7 +65,7 @@ unsafe fn probe_slot(s: &mut sensing::Sensing, g: &mut MmioGlobal, w: *const u32
             &mut *(o as *mut [i32; sensing::SCRIPT_OUT_WORDS]),
         )
     };
-    sensing::scripted_slot(s, w, &mut board_sensing::GlobalCal(g), o);
+    sensing::scripted_slot(s, w, g, o);
 }
 
 fn safe_stop() {

@@ -901,13 +901,17 @@ __sense_feedback:
 
 /* ---- the sensing board's common slot (crates/sensing: Sensing::process) ----
  * u32 __sense_process(Sensing *s, const Conversion *c, const AdcSample *smp, const i32 *inv,
- *                     const i32 *area, Estimate *e, const Tables *t):
+ *                     const i32 *area, Estimate *e, const Tables *t, u32 *const *publish):
  * the processing of one sample when it is the common case: a sum of OCCLUDED_BELOW codes or
  * more, no input over range, a checked table (inv: its inverse grid, area: its calibrated
  * square). Then, as the Rust: the previous sample's record (prev_next, prev_raw), the
  * crosstalk correction, the filter (__sense_filter), the LED feedback (or the fixed level),
  * the raw record, the object record (position by __sense_locate, or filling), the frame
- * counters after beacon 7. Returns 1 with the estimate in *e, 0 without one (filling), or
+ * counters after beacon 7; then, when publish is not null (publish[0], publish[1]: the
+ * sequence words of the object and the raw table in global RAM), the beacon's four words of
+ * each table and after beacon 7 their frame words, each under its sequence lock as
+ * vme_map's SeqLock::publish_words writes them (Sensing::publish in the Rust). Returns 1
+ * with the estimate in *e, 0 without one (filling), or
  * 2 for any other case, with nothing changed (the Rust takes it). Bit-identical to
  * Sensing::process (tests/tests/sensing.rs compares the image with the host slot by slot).
  * Offsets: crates/sensing/src/lib.rs `layout` (asserted there). */
@@ -924,6 +928,38 @@ __sense_feedback:
     .set    S_PREV_NEXT, 8704       /* Sensing::prev_next (u8) */
     .set    T_XTALK, 1028           /* Tables::crosstalk_q16 */
     .set    FILTER_BYTES, 1048      /* sensing::filter::layout::FILTER_BYTES */
+/* SEQ_ODD seq: d0 = the sequence word at (seq) made odd, (s | 1) + ((s & 1) << 1) as
+ * SeqLock::publish_words makes it, and written back; d2 used. */
+.macro SEQ_ODD seq
+    move.l  (\seq), %d0
+    moveq   #1, %d2
+    and.l   %d0, %d2
+    add.l   %d2, %d2
+    ori.b   #1, %d0
+    add.l   %d2, %d0
+    move.l  %d0, (\seq)
+.endm
+/* PUBLISH4 seq, src: the four words at src (advanced past them) to the table whose
+ * sequence word is at seq, from its record's word 1 + d1 / 4 on (d1 = 16 x the beacon;
+ * word 0 is the frame), under the lock; d0, d2, a1 used. */
+.macro PUBLISH4 seq, src
+    SEQ_ODD \seq
+    lea     8(\seq,%d1.l), %a1         /* past the sequence and frame words */
+    move.l  (\src)+, (%a1)+
+    move.l  (\src)+, (%a1)+
+    move.l  (\src)+, (%a1)+
+    move.l  (\src)+, (%a1)+
+    addq.l  #1, %d0
+    move.l  %d0, (\seq)
+.endm
+/* PUBLISH1 seq, word: the word to the record's word 0 (the frame) of the table at seq,
+ * under the lock. */
+.macro PUBLISH1 seq, word
+    SEQ_ODD \seq
+    move.l  \word, 4(\seq)
+    addq.l  #1, %d0
+    move.l  %d0, (\seq)
+.endm
     .section .text.__sense_process, "ax"
     .globl __sense_process
 __sense_process:
@@ -1085,7 +1121,22 @@ __sense_process:
     bne.s   22f
     addq.l  #1, S_OBJ_FRAME(%a5)
     move.l  S_OBJ_FRAME(%a5), S_RAW_FRAME(%a5)
-22: move.l  %d3, %d0
+    /* the publication, when asked for: the tables' sequence words at publish */
+22: movea.l 72(%sp), %a0            /* publish (44 + 28) */
+    cmpa.w  #0, %a0
+    beq.w   24f
+    movea.l 4(%a0), %a3             /* the raw table's sequence word (c is done with) */
+    movea.l (%a0), %a0              /* the object table's */
+    move.l  %d7, %d1
+    lsl.l   #4, %d1                 /* the beacon's words: 16 bytes a beacon */
+    PUBLISH4 %a0, %a2               /* x_um, y_um, t_us, flags */
+    lea     S_RAW_B(%a5,%d1.l), %a2
+    PUBLISH4 %a3, %a2               /* x_q5, y_q5, sum_codes, level_ma */
+    cmpi.b  #7, %d7
+    bne.s   24f
+    PUBLISH1 %a0, S_OBJ_FRAME(%a5)
+    PUBLISH1 %a3, S_RAW_FRAME(%a5)
+24: move.l  %d3, %d0
     movem.l (%sp)+, %d2-%d7/%a2-%a5
     rts
 90: moveq   #2, %d0

@@ -23,6 +23,36 @@ pub trait CalWords {
     fn base(&mut self) -> Option<*const u32> {
         None
     }
+    /// The sequence words of the object table and of the raw signal table where global RAM
+    /// is memory-mapped (the 68020), for the common slot's assembly to publish the processed
+    /// beacon itself (`Output::published`); `None` (the default) where it is not, and the
+    /// board publishes ([`crate::Sensing::publish`]).
+    fn tables(&mut self) -> Option<[*mut u32; 2]> {
+        None
+    }
+}
+
+/// The calibration table in global RAM (at `vme_map::SENSING_CAL`), and the tables the
+/// board publishes, on any bus: the board's wiring and the image-against-host script.
+pub struct GlobalCal<'a, G: vme_map::GlobalBus>(pub &'a mut G);
+
+impl<G: vme_map::GlobalBus> CalWords for GlobalCal<'_, G> {
+    #[inline(always)]
+    fn word(&mut self, i: u32) -> u32 {
+        self.0.read_u32(vme_map::SENSING_CAL + 4 * i)
+    }
+    #[inline(always)]
+    fn base(&mut self) -> Option<*const u32> {
+        self.0.word_ptr(vme_map::SENSING_CAL)
+    }
+    #[inline(always)]
+    fn tables(&mut self) -> Option<[*mut u32; 2]> {
+        // Addresses in the VME window (integers made pointers): written only by the
+        // assembly, under the tables' sequence locks, as `SeqLock::publish_words` does.
+        let o = self.0.word_ptr(vme_map::OBJECTS.offset())?;
+        let r = self.0.word_ptr(vme_map::SENSING_RAW.offset())?;
+        Some([o as *mut u32, r as *mut u32])
+    }
 }
 
 /// Words checked per strobe slot (about 2,500 cycles on the 68020; the whole table in

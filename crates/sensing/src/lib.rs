@@ -232,6 +232,10 @@ pub struct Output {
     pub beacon: Option<u8>,
     /// A fault to record: an [`Event::code`], 0 for none.
     pub event: u32,
+    /// The beacon's words (and the frame words after beacon 7) are already in global RAM:
+    /// the common slot's assembly published them ([`CalWords::tables`]). When false, the
+    /// board publishes them with [`Sensing::publish`].
+    pub published: bool,
 }
 
 impl Output {
@@ -398,9 +402,10 @@ impl Sensing {
         let (Some(conv), Some(s)) = (self.sampled.take(), &input.sample) else {
             return out;
         };
-        let ev = self.process(conv, s, input.servo, cal);
+        let (ev, published) = self.process(conv, s, input.servo, cal);
         out.beacon = Some(conv.beacon);
         out.event = merge(out.event, ev);
+        out.published = published;
         out
     }
 
@@ -410,7 +415,7 @@ impl Sensing {
         s: &AdcSample,
         servo: Option<ServoView>,
         cal: &mut impl CalWords,
-    ) -> u32 {
+    ) -> (u32, bool) {
         // On the 68020 the common slot (a well-lit, unsaturated sample with a checked table
         // mapped in global RAM) is one call of the runtime's assembly, bit-identical to the
         // Rust below (`tests/tests/sensing.rs` compares the image with the host slot by
@@ -426,14 +431,18 @@ impl Sensing {
                     area_um: *const i32,
                     out: *mut filter::Estimate,
                     tables: *const Tables,
+                    publish: *const *mut u32,
                 ) -> u32;
             }
             let area = h.area_um.as_ptr();
             let mut e = filter::Estimate::default();
+            let publish = cal.tables();
             // SAFETY: the routine reads and writes only `*self` and `e` at the offsets
             // `layout` asserts, reads `conv`, `s`, the area, the tables, and the inverse
             // grid's cell at the clamped signals (`base` maps the whole table: the checker
-            // read every word). It changes nothing when it returns 2.
+            // read every word), and writes the beacon's words and the frame words of the
+            // object and raw tables behind their sequence words (`publish`, when not null;
+            // `layout` asserts the tables' shape). It changes nothing when it returns 2.
             let r = unsafe {
                 __sense_process(
                     self as *mut Sensing as *mut u8,
@@ -443,14 +452,16 @@ impl Sensing {
                     area,
                     &mut e,
                     &TABLES,
+                    publish.as_ref().map_or(core::ptr::null(), |p| p.as_ptr()),
                 )
             };
             if r != 2 {
-                return if conv.beacon as usize & 7 == beacon_index::TIP {
+                let ev = if conv.beacon as usize & 7 == beacon_index::TIP {
                     self.reference((r != 0).then_some(e), servo, cal)
                 } else {
                     0
                 };
+                return (ev, publish.is_some());
             }
         }
         let b = conv.beacon as usize & 7;
@@ -543,7 +554,30 @@ impl Sensing {
             self.objects.frame = self.objects.frame.wrapping_add(1);
             self.raw.frame = self.objects.frame;
         }
-        event
+        (event, false)
+    }
+
+    /// Publishes beacon `b`'s words of the object table and of the raw signal table, and
+    /// after beacon 7 both frame words, each under its table's sequence lock: only the
+    /// processed beacon's words change in a slot. From where the words lie (a copy of each
+    /// record first cost 130 cycles a slot on the 68020). What the board does after a step
+    /// whose [`Output::published`] is false.
+    #[inline(always)]
+    pub fn publish<G: vme_map::GlobalBus>(&self, g: &mut G, b: u8) {
+        let i = b as usize & 7;
+        let o = &self.objects.beacons[i];
+        let base = 1 + 4 * i as u32;
+        vme_map::OBJECTS.publish_words(g, base, &[o.x_um as u32, o.y_um as u32, o.t_us, o.flags]);
+        let r = &self.raw.beacons[i];
+        vme_map::SENSING_RAW.publish_words(
+            g,
+            base,
+            &[r.x_q5 as u32, r.y_q5 as u32, r.sum_codes as u32, r.level_ma],
+        );
+        if i == BEACONS - 1 {
+            vme_map::OBJECTS.publish_words(g, 0, &[self.objects.frame]);
+            vme_map::SENSING_RAW.publish_words(g, 0, &[self.raw.frame]);
+        }
     }
 
     /// The tip as the drift reference: learns from it while the arm rests. Once a frame, so
@@ -668,6 +702,11 @@ pub mod layout {
     const _: () = assert!(offset_of!(AdcSample, over) == 6);
     const _: () = assert!(offset_of!(Tables, recip_q16) == 0);
     const _: () = assert!(offset_of!(Tables, crosstalk_q16) == 1028);
+    // The published tables: a sequence word, the frame word, then four words a beacon in
+    // the order of the records in `Sensing` (copied as they lie).
+    use vme_map::record::Record;
+    const _: () = assert!(ObjectTable::WORDS == 1 + 4 * super::BEACONS as u32);
+    const _: () = assert!(RawTable::WORDS == 1 + 4 * super::BEACONS as u32);
     // The flag and option bits the assembly sets and tests.
     use vme_map::records::{beacon_flags as bf, sensing_options as opt};
     const _: () = assert!(bf::VALID == 1 && bf::CORRECTED == 8 && bf::EXTRAPOLATED == 32);
@@ -694,14 +733,16 @@ fn next_grid(due: u16, timer: u16, started: bool) -> u16 {
 /// configuration was read, with the options in bits 8..12 and the fixed drive 50 + bits
 /// 12..22 mA); link 1 and link 2 angles (micro-radians); the servo's loop count. Writes to
 /// `out`: the next beacon, its drive level, the processed beacon (8: none), the event code,
-/// and the
-/// processed beacon's x_um, y_um, flags, raw x_q5, raw y_q5, timestamp, sum codes and
-/// recorded level, then the frame counters of the object and raw tables (all -1 when no
-/// slot was due): [`SCRIPT_OUT_WORDS`] words.
-pub fn scripted_slot(
+/// and the processed beacon's x_um, y_um, flags, raw x_q5, raw y_q5, timestamp, sum codes
+/// and recorded level, then the frame words of the object and raw tables, then their
+/// sequence words (all -1 when no slot was due): [`SCRIPT_OUT_WORDS`] words. The step reads
+/// the calibration table from global RAM `g` and the beacon is published there as the board
+/// does (by the step's assembly on the 68020, else [`Sensing::publish`]); the words written
+/// out are read back from the published tables.
+pub fn scripted_slot<G: vme_map::GlobalBus>(
     s: &mut Sensing,
     w: &[u32; 8],
-    cal: &mut impl CalWords,
+    g: &mut G,
     out: &mut [i32; SCRIPT_OUT_WORDS],
 ) {
     *out = [-1; SCRIPT_OUT_WORDS];
@@ -729,8 +770,13 @@ pub fn scripted_slot(
         servo,
         config,
     };
-    let o = s.step(&input, cal);
+    let o = s.step(&input, &mut cal::GlobalCal(g));
+    if let (Some(b), false) = (o.beacon, o.published) {
+        s.publish(g, b);
+    }
     let b = o.beacon.map_or(8, |b| b as usize);
+    let (obj, raw) = (vme_map::OBJECTS.offset(), vme_map::SENSING_RAW.offset());
+    let mut word = |off: u32| g.read_u32(off) as i32;
     *out = [
         slot.next as i32,
         slot.level_ma as i32,
@@ -744,25 +790,28 @@ pub fn scripted_slot(
         0,
         0,
         0,
-        s.objects.frame as i32,
-        s.raw.frame as i32,
+        word(obj + 4),
+        word(raw + 4),
+        word(obj),
+        word(raw),
     ];
     if b < BEACONS {
-        let r = s.objects.beacons[b];
-        let raw = s.raw.beacons[b];
-        out[4] = r.x_um;
-        out[5] = r.y_um;
-        out[6] = r.flags as i32;
-        out[7] = raw.x_q5;
-        out[8] = raw.y_q5;
-        out[9] = r.t_us as i32;
-        out[10] = raw.sum_codes;
-        out[11] = raw.level_ma as i32;
+        // The beacon's words as published (past the sequence and frame words): x, y, t,
+        // flags; raw x, y, sum, level.
+        let (o, r) = (obj + 8 + 16 * b as u32, raw + 8 + 16 * b as u32);
+        out[4] = word(o);
+        out[5] = word(o + 4);
+        out[6] = word(o + 12);
+        out[7] = word(r);
+        out[8] = word(r + 4);
+        out[9] = word(o + 8);
+        out[10] = word(r + 8);
+        out[11] = word(r + 12);
     }
 }
 
 /// Words [`scripted_slot`] writes per slot.
-pub const SCRIPT_OUT_WORDS: usize = 14;
+pub const SCRIPT_OUT_WORDS: usize = 16;
 
 /// The task-space position (micrometres) of filtered signals `v_q5`: the drift removed
 /// when `correct` is 1 ([`Drift::correct`]; 0: not), then the inverse grid ([`cal::position_um`]);
