@@ -913,7 +913,9 @@ __sense_feedback:
  * vme_map's SeqLock::publish_words writes them (Sensing::publish in the Rust). Returns 1
  * with the estimate in *e, 0 without one (filling), or
  * 2 for any other case, with nothing changed (the Rust takes it). Bit-identical to
- * Sensing::process (tests/tests/sensing.rs compares the image with the host slot by slot).
+ * Sensing::process (tests/tests/sensing.rs compares the image with the host slot by slot)
+ * for the converter's 12-bit codes and a configuration as Config::from_record or
+ * Config::default make it (s_ref 410..2047): the products that fit are 16 x 16 bits.
  * Offsets: crates/sensing/src/lib.rs `layout` (asserted there). */
     .set    S_OBJ_FRAME, 8384       /* Sensing::objects.frame */
     .set    S_OBJ_B, 8388           /* Sensing::objects.beacons: 16 bytes each */
@@ -1016,8 +1018,8 @@ __sense_process:
     move.l  T_XTALK(%a0,%d3.l*4), %d3
     neg.l   %d1                     /* raw - prev */
     neg.l   %d2
-    muls.l  %d3, %d1
-    muls.l  %d3, %d2
+    muls.w  %d3, %d1                /* 16 x 16 bits: |raw - prev| < 4096 (12-bit codes), */
+    muls.w  %d3, %d2                /* the factor at most 1500 */
     moveq   #14, %d3
     asr.l   %d3, %d1
     asr.l   %d3, %d2
@@ -1050,9 +1052,8 @@ __sense_process:
     bne.s   4f
     move.l  S_LEVEL(%a5), %d0
     bra.s   6f
-4:  moveq   #0, %d0
-    move.w  (%a0), %d0
-    muls.l  S_SREF(%a5), %d0
+4:  move.w  (%a0), %d0
+    mulu.w  S_SREF+2(%a5), %d0      /* 16 x 16 bits: the level a u16, s_ref in 410..2047 */
     divs.l  %d6, %d0                /* sum >= 205 here */
     CLAMP_LEVEL                     /* as __sense_feedback */
 6:  move.w  %d0, (%a0)

@@ -715,6 +715,16 @@ pub mod layout {
     const _: () = assert!(opt::ADAPTIVE_FILTER == 4 && opt::CROSSTALK == 8);
     const _: () = assert!(super::OCCLUDED_BELOW_CODES == 205);
     const _: () = assert!(super::LEVEL_MIN_MA == 50 && super::LEVEL_MAX_MA == 1000);
+    // The 16 x 16-bit products: the crosstalk factors and the default reference fit a word
+    // (`Config::from_record` keeps s_ref in OCCLUDED_BELOW_CODES * 2..2048).
+    const _: () = {
+        let mut i = 0;
+        while i < super::CROSSTALK_Q16.len() {
+            assert!(super::CROSSTALK_Q16[i] >= 0 && super::CROSSTALK_Q16[i] <= 1500);
+            i += 1;
+        }
+    };
+    const _: () = assert!(super::DEFAULT_S_REF_CODES >= 410 && super::DEFAULT_S_REF_CODES < 2048);
 }
 
 /// Where this slot sits on the grid: `due` if it is less than a whole slot late (and the
