@@ -252,7 +252,41 @@ impl Output {
 struct Conversion {
     t_us: u32,
     lit_ticks: u16,
-    beacon: u8,
+    beacon: Ix,
+}
+
+/// A beacon's index, 0..=7, as a type with a niche: `Option<Conversion>` is then two words
+/// and `Option<Ix>` one byte, and the slot's copies of them are word moves on the 68020
+/// (with a `u8` they were 12 and 2 bytes, shuffled a field at a time).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+enum Ix {
+    B0,
+    B1,
+    B2,
+    B3,
+    B4,
+    B5,
+    B6,
+    B7,
+}
+
+impl Ix {
+    /// The beacon lit after this one.
+    #[inline(always)]
+    fn next(self) -> Self {
+        const ALL: [Ix; BEACONS] = [
+            Ix::B0,
+            Ix::B1,
+            Ix::B2,
+            Ix::B3,
+            Ix::B4,
+            Ix::B5,
+            Ix::B6,
+            Ix::B7,
+        ];
+        ALL[(self as usize + 1) & 7]
+    }
 }
 
 /// The sensing board's state. `repr(C)`, the fields the common slot's assembly
@@ -278,7 +312,7 @@ pub struct Sensing {
     slot_timer: u16,
     half_tick: u32,
     now_us: u32,
-    lit: Option<u8>,
+    lit: Option<Ix>,
     converting: Option<Conversion>,
     sampled: Option<Conversion>,
     /// The calibration table check.
@@ -378,13 +412,13 @@ impl Sensing {
             t_us: self.now_us,
             lit_ticks,
         });
-        let next = self.lit.map_or(0, |b| (b + 1) & 7);
+        let next = self.lit.map_or(Ix::B0, Ix::next);
         self.lit = Some(next);
         Some(Slot {
             start: self.converting.is_some(),
-            next,
+            next: next as u8,
             level_ma: self.levels[next as usize],
-            processing: self.sampled.map(|c| c.beacon),
+            processing: self.sampled.map(|c| c.beacon as u8),
         })
     }
 
@@ -403,7 +437,7 @@ impl Sensing {
             return out;
         };
         let (ev, published) = self.process(conv, s, input.servo, cal);
-        out.beacon = Some(conv.beacon);
+        out.beacon = Some(conv.beacon as u8);
         out.event = merge(out.event, ev);
         out.published = published;
         out
@@ -435,7 +469,9 @@ impl Sensing {
                 ) -> u32;
             }
             let area = h.area_um.as_ptr();
-            let mut e = filter::Estimate::default();
+            // Written by the routine when it returns 1, read only then: not zeroed first (27
+            // cycles a slot).
+            let mut e = core::mem::MaybeUninit::<filter::Estimate>::uninit();
             let publish = cal.tables();
             // SAFETY: the routine reads and writes only `*self` and `e` at the offsets
             // `layout` asserts, reads `conv`, `s`, the area, the tables, and the inverse
@@ -450,14 +486,16 @@ impl Sensing {
                     s,
                     base.add(vme_map::records::cal::INV as usize),
                     area,
-                    &mut e,
+                    e.as_mut_ptr(),
                     &TABLES,
                     publish.as_ref().map_or(core::ptr::null(), |p| p.as_ptr()),
                 )
             };
             if r != 2 {
                 let ev = if conv.beacon as usize & 7 == beacon_index::TIP {
-                    self.reference((r != 0).then_some(e), servo, cal)
+                    // SAFETY: 1 says the routine wrote the whole estimate.
+                    let e = (r == 1).then(|| unsafe { e.assume_init() });
+                    self.reference(e, servo, cal)
                 } else {
                     0
                 };
@@ -468,7 +506,7 @@ impl Sensing {
         let raw = [s.x as i32 - 2048, s.y as i32 - 2048];
         let sum = s.sum as i32 - 2048;
         let (prev_next, prev_raw) = (self.prev_next, self.prev_raw);
-        self.prev_next = (conv.beacon + 1) & 7;
+        self.prev_next = conv.beacon.next() as u8;
         self.prev_raw = raw;
         let mut event = 0;
         let mut flags = 0;
@@ -486,13 +524,13 @@ impl Sensing {
             flags |= bf::SATURATED;
             // Too bright, or a faulty input: drive less (the feedback brings it back).
             self.levels[b] = (self.levels[b] as i32 >> 1).max(LEVEL_MIN_MA) as u16;
-            event = Event::Saturated(conv.beacon).code();
+            event = Event::Saturated(conv.beacon as u8).code();
         } else {
             let mut q2 = [raw[0] << 2, raw[1] << 2];
             // Only when on and the previous sample was of the beacon lit just before: masks,
             // not branches (their compares' flags were clobbered on the 68k;
             // docs/toolchain.md class 1).
-            let d = (prev_next ^ conv.beacon) as i32;
+            let d = (prev_next ^ conv.beacon as u8) as i32;
             let on = (cfg.has(opt::CROSSTALK) as i32).wrapping_neg();
             let consecutive = !((d | d.wrapping_neg()) >> 31) & on;
             crosstalk_q2(&mut q2, &raw, &prev_raw, conv.lit_ticks, consecutive);
@@ -696,6 +734,7 @@ pub mod layout {
     const _: () = assert!(offset_of!(Conversion, t_us) == 0);
     const _: () = assert!(offset_of!(Conversion, lit_ticks) == 4);
     const _: () = assert!(offset_of!(Conversion, beacon) == 6);
+    const _: () = assert!(size_of::<super::Ix>() == 1 && super::Ix::B7 as u8 == 7);
     const _: () = assert!(offset_of!(AdcSample, x) == 0);
     const _: () = assert!(offset_of!(AdcSample, y) == 2);
     const _: () = assert!(offset_of!(AdcSample, sum) == 4);
