@@ -787,31 +787,34 @@ __sense_filter:
     lsr.l   #3, \v
 .endm
 
-/* BILIN off, r: r = cal's bilinear blend of the cell at a0, word offset off (0: x, 4: y);
- * d2 = fx, d3 = fy (Q10), d7 = 10; d0, d6 scratch. Products and sums as i32. */
-.macro BILIN off, r
+/* BILIN off, r, mul: r = cal's bilinear blend of the cell at a0, word offset off (0: x,
+ * 4: y); d2 = fx, d3 = fy (Q10), d7 = 10; d0, d6 scratch. Products and sums as i32; mul is
+ * the multiply: muls.l for any table, muls.w (27 cycles, not 45) for one whose steps between
+ * neighbouring nodes fit a word (cal::Header::word_steps: then v1 - v0, v3 - v2 and b - a,
+ * which lies between v2 - v0 and v3 - v1, all do). */
+.macro BILIN off, r, mul
     move.l  \off(%a0), %d0          /* v0 */
     move.l  8+\off(%a0), %d6        /* v1 */
     sub.l   %d0, %d6
-    muls.l  %d2, %d6
+    \mul   %d2, %d6
     asr.l   %d7, %d6
     add.l   %d0, %d6                /* a = v0 + ((v1 - v0) fx >> 10) */
     move.l  INV_ROW+\off(%a0), %d0  /* v2 */
     move.l  INV_ROW+8+\off(%a0), \r /* v3 */
     sub.l   %d0, \r
-    muls.l  %d2, \r
+    \mul   %d2, \r
     asr.l   %d7, \r
     add.l   %d0, \r                 /* b = v2 + ((v3 - v2) fx >> 10) */
     sub.l   %d6, \r
-    muls.l  %d3, \r
+    \mul   %d3, \r
     asr.l   %d7, \r
     add.l   %d6, \r                 /* a + ((b - a) fy >> 10) */
 .endm
 
-/* LOCATE a: the body of __sense_locate with its six arguments at a(%sp) on (inv, vx, vy,
- * drift, area, out); ends with d0 = 1 (outside the area) or 0. Uses d0-d7, a0. Also
- * expanded in place by __sense_process. */
-.macro LOCATE a
+/* LOCATE a, mul: the body of __sense_locate with its six arguments at a(%sp) on (inv, vx,
+ * vy, drift, area, out), BILIN's products by mul; ends with d0 = 1 (outside the area) or 0.
+ * Uses d0-d7, a0. Also expanded in place by __sense_process, with muls.w. */
+.macro LOCATE a, mul
     move.l  \a+4(%sp), %d0            /* vx */
     move.l  \a+8(%sp), %d1            /* vy */
     movea.l \a+12(%sp), %a0            /* drift */
@@ -831,8 +834,8 @@ __sense_filter:
     lsl.l   #3, %d0
     adda.l  %d0, %a0
     moveq   #10, %d7
-    BILIN   0, %d4                  /* x */
-    BILIN   4, %d5                  /* y */
+    BILIN   0, %d4, \mul            /* x */
+    BILIN   4, %d5, \mul            /* y */
     movea.l \a+20(%sp), %a0            /* out */
     move.l  %d4, (%a0)
     move.l  %d5, 4(%a0)
@@ -860,7 +863,7 @@ __sense_filter:
     .globl __sense_locate
 __sense_locate:
     movem.l %d2-%d7, -(%sp)         /* arguments now at 28: inv, vx, vy, drift, area, out */
-    LOCATE  28
+    LOCATE  28, muls.l
     movem.l (%sp)+, %d2-%d7
     rts
 
@@ -903,8 +906,9 @@ __sense_feedback:
  * u32 __sense_process(Sensing *s, const Conversion *c, const AdcSample *smp, const i32 *inv,
  *                     const i32 *area, Estimate *e, const Tables *t, u32 *const *publish):
  * the processing of one sample when it is the common case: a sum of OCCLUDED_BELOW codes or
- * more, no input over range, a checked table (inv: its inverse grid, area: its calibrated
- * square). Then, as the Rust: the previous sample's record (prev_next, prev_raw), the
+ * more, no input over range, a checked table whose node steps fit a word (inv: its inverse
+ * grid, null when they do not: cal::Checker::word_steps_mask; area: its calibrated square).
+ * Then, as the Rust: the previous sample's record (prev_next, prev_raw), the
  * crosstalk correction, the filter (__sense_filter), the LED feedback (or the fixed level),
  * the raw record, the object record (position by __sense_locate, or filling), the frame
  * counters after beacon 7; then, when publish is not null (publish[0], publish[1]: the
@@ -966,6 +970,8 @@ __sense_feedback:
     .globl __sense_process
 __sense_process:
     /* the rare cases first, before any register is saved (they leave for the Rust) */
+    tst.l   16(%sp)
+    beq.w   90f                     /* no grid: the table's steps do not fit a word */
     movea.l 12(%sp), %a0            /* smp */
     tst.b   6(%a0)
     bne.w   90f                     /* over range: the Rust */
@@ -1090,7 +1096,7 @@ __sense_process:
     move.l  4(%a1), -(%sp)
     move.l  (%a1), -(%sp)
     move.l  80(%sp), -(%sp)         /* inv (56 + 24) */
-    LOCATE  0
+    LOCATE  0, muls.w               /* the table's steps fit a word: the Rust checked */
     lea     24(%sp), %sp
     move.l  (%sp)+, %d2             /* correct */
     /* flags: VALID, CORRECTED, EXTRAPOLATED, MOVING, FILLING, samples << 8 */

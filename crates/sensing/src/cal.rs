@@ -112,6 +112,10 @@ pub struct Checker {
     pub state: State,
     magic: u32,
     generation: u32,
+    /// Not 0 when the table being checked (or in use) has a step between neighbouring
+    /// inverse nodes that does not fit an i16 (kept out of [`State`] and [`Header`]: growing
+    /// those drew miscompiles of the M68k backend in the board's step).
+    wide: u32,
 }
 
 impl Default for Checker {
@@ -127,6 +131,7 @@ impl Checker {
             state: State::Checking { at: 0, sum: 0 },
             magic: 0,
             generation: 0,
+            wide: 0,
         }
     }
 
@@ -143,6 +148,17 @@ impl Checker {
         }
     }
 
+    /// All ones when every step between neighbouring inverse nodes of the table (along a
+    /// row or a column, either component) fits an i16 (-32768..=[`MAX_WORD_STEP_UM`] um),
+    /// else 0: the lookup's products then fit 16 x 16 bits, as the common slot's assembly takes them (it
+    /// is given a null grid, and leaves the slot to the Rust, for a table with a wider
+    /// step). A mask, not a flag: a test of a flag here drew a condition-code clobber on the
+    /// 68k (docs/toolchain.md class 1).
+    pub fn word_steps_mask(&self) -> usize {
+        // 1 when any bit is set, then 1 - 1 = 0, or 0 - 1 = all ones.
+        (((self.wide | self.wide.wrapping_neg()) >> 31) as usize).wrapping_sub(1)
+    }
+
     /// One slot's share of the check. Returns `Some(reason)` when a table is refused.
     pub fn step(&mut self, t: &mut impl CalWords) -> Option<Reason> {
         let magic = t.word(cal::W_MAGIC);
@@ -151,6 +167,7 @@ impl Checker {
             self.magic = magic;
             self.generation = generation;
             self.state = State::Checking { at: 0, sum: 0 };
+            self.wide = 0;
         }
         let State::Checking { at, sum } = self.state else {
             return None;
@@ -162,7 +179,8 @@ impl Checker {
             }
         }
         let end = (at + CHECK_WORDS).min(cal::WORDS);
-        let (sum, bad_node) = check_words(t, at, end, sum);
+        let (sum, bad_node, wide) = check_words(t, at, end, sum);
+        self.wide |= wide;
         if bad_node {
             self.state = State::Bad(Reason::Node);
             return Some(Reason::Node);
@@ -210,11 +228,21 @@ fn header_fault(t: &mut impl CalWords) -> Option<Reason> {
     None
 }
 
+/// The widest step up between neighbouring inverse nodes for [`Checker::word_steps_mask`]
+/// (down: -32768 um; an i16 either way). The model camera's table steps at most 21.9 mm.
+pub const MAX_WORD_STEP_UM: i32 = i16::MAX as i32;
+
 /// Runs the checksum over words `from..to` (skipping the checksum word) and checks inverse
-/// nodes' range. Returns the checksum and whether a node was out of range.
+/// nodes' range and their steps from the node before in the row and the node above.
+/// Returns the checksum, whether a node was out of range, and not 0 when a step did not
+/// fit an i16 (-32768..=[`MAX_WORD_STEP_UM`]).
 #[inline(never)]
-fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32, bool) {
+fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32, bool, u32) {
+    const ROW: u32 = 2 * cal::INV_N;
     let mut bad = false;
+    let mut wide = 0;
+    // The word's place in its row of (x, y) pairs: one division a call.
+    let mut in_row = from.saturating_sub(cal::INV) % ROW;
     let mut i = from;
     while i < to {
         let w = t.word(i);
@@ -224,10 +252,28 @@ fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32,
         if i >= cal::INV {
             let v = w as i32;
             bad |= !(-cal::MAX_NODE_UM..=cal::MAX_NODE_UM).contains(&v);
+            if in_row >= 2 {
+                wide |= wide_step(v, t.word(i - 2));
+            }
+            if i >= cal::INV + ROW {
+                wide |= wide_step(v, t.word(i - ROW));
+            }
+            in_row += 1;
+            if in_row == ROW {
+                in_row = 0;
+            }
         }
         i += 1;
     }
-    (sum, bad)
+    (sum, bad, wide)
+}
+
+/// Not 0 when the step from its neighbour's word `n` to node value `v` does not fit an i16
+/// (-32768..=[`MAX_WORD_STEP_UM`]). By arithmetic, not a compare: the range test drew a
+/// condition-code clobber on the 68k (docs/toolchain.md class 1).
+#[inline(always)]
+fn wide_step(v: i32, n: u32) -> u32 {
+    (v.wrapping_sub(n as i32).wrapping_add(-(i16::MIN as i32)) as u32) >> 16
 }
 
 /// The checksum of a whole table (the host writes it with this).

@@ -453,7 +453,8 @@ impl Sensing {
         // On the 68020 the common slot (a well-lit, unsaturated sample with a checked table
         // mapped in global RAM) is one call of the runtime's assembly, bit-identical to the
         // Rust below (`tests/tests/sensing.rs` compares the image with the host slot by
-        // slot); the rest takes the Rust.
+        // slot); the rest takes the Rust, and so does a table whose steps do not fit the
+        // assembly's 16 x 16-bit products (`Checker::word_steps_mask`: a null grid).
         #[cfg(target_arch = "m68k")]
         if let (Some(base), Some(h)) = (cal.base(), self.checker.header_ref()) {
             extern "C" {
@@ -484,7 +485,8 @@ impl Sensing {
                     self as *mut Sensing as *mut u8,
                     &conv,
                     s,
-                    base.add(vme_map::records::cal::INV as usize),
+                    (base.add(vme_map::records::cal::INV as usize) as usize
+                        & self.checker.word_steps_mask()) as *const u32,
                     area,
                     e.as_mut_ptr(),
                     &TABLES,
@@ -563,13 +565,9 @@ impl Sensing {
                 beacon.y_um = p[1];
                 flags |= bf::VALID
                     | (bf::CORRECTED & correct.wrapping_neg())
-                    | (bf::EXTRAPOLATED & out.wrapping_neg());
-                if e.moving {
-                    flags |= bf::MOVING;
-                }
-                if e.filling {
-                    flags |= bf::FILLING;
-                }
+                    | (bf::EXTRAPOLATED & out.wrapping_neg())
+                    | (bf::MOVING & (e.moving as u32).wrapping_neg())
+                    | (bf::FILLING & (e.filling as u32).wrapping_neg());
                 flags |= (e.samples as u32) << bf::SAMPLES_SHIFT;
             }
             (None, h) => {

@@ -82,6 +82,47 @@ fn a_good_table_is_accepted_after_its_words_are_read() {
     assert_eq!(h.area_um, [-350_000, 350_000, -350_000, 350_000]);
 }
 
+/// The common slot's assembly takes the lookup's products 16 x 16 bits, so a table goes to it
+/// only when every step between neighbouring inverse nodes fits a word: one node moved so
+/// that a step along a row (x) or down a column (y) is one micrometre too wide clears the
+/// mask, one micrometre less keeps it, and a table of another generation is judged afresh.
+/// (The linear table steps 12.8 mm along both; a row's last node is not its next row's
+/// first node's neighbour, 819 mm away.)
+#[test]
+fn only_tables_whose_node_steps_fit_a_word_go_to_the_word_lookup() {
+    let mut c = Checker::new();
+    assert_eq!(check_fully(&mut c, &mut Words(linear_table())), None);
+    assert_eq!(c.word_steps_mask(), usize::MAX);
+    let n = fmt::INV_N as usize;
+    let step = cal::MAX_WORD_STEP_UM - 12_800;
+    for (comp, by, wide) in [
+        (0, step, false),
+        (0, step + 1, true),
+        (1, step, false),
+        (1, step + 1, true),
+    ] {
+        let mut w = linear_table();
+        w[fmt::W_GENERATION as usize] = 8 + comp as u32 * 2 + wide as u32;
+        let k = fmt::INV as usize + 2 * (20 * n + 10) + comp;
+        w[k] = (w[k] as i32 + by) as u32;
+        w[fmt::W_CHECKSUM as usize] = cal::checksum(&w);
+        assert_eq!(
+            check_fully(&mut c, &mut Words(w)),
+            None,
+            "still a good table"
+        );
+        assert!(c.header().is_some());
+        let mask = if wide { 0 } else { usize::MAX };
+        assert_eq!(c.word_steps_mask(), mask, "component {comp} moved {by} um");
+    }
+    assert_eq!(check_fully(&mut c, &mut Words(linear_table())), None);
+    assert_eq!(
+        c.word_steps_mask(),
+        usize::MAX,
+        "a new table is judged afresh"
+    );
+}
+
 #[test]
 fn corrupt_tables_are_refused_with_their_reason() {
     type Spoil = fn(&mut Vec<u32>);
