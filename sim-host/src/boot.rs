@@ -235,6 +235,9 @@ pub struct Profile {
     /// (instruction address, cycles spent on it, times executed, its function's short
     /// name), most cycles first: for reading beside `m68k-linux-gnu-objdump -d` of the image.
     pub addresses: Vec<(u32, u64, u64, String)>,
+    /// The sensing board's (busy cycles, strobe slots) in the profiled time
+    /// (`sensing_bench::SlotMeter`): its work without the wait for the timer.
+    pub busy: Option<(u64, u64)>,
 }
 
 /// Boots `board` alone (the sensing board with eight beacons in view, run 0.6 s first to
@@ -245,9 +248,12 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
     let image = Image::load(&dir.join(format!("{}.elf", image_name(board))))?;
     let mut per = FunctionCycles::new(&image);
     let mut sys = System::power_up(dir, &[board])?;
+    let mut meter = None;
     if board == BoardId::Sensing {
         // Eight beacons in view, and past the calibration table's check: the steady state.
-        sys.boards[0].io = crate::sensing_bench::lit_camera(1);
+        let (io, m) = crate::sensing_bench::metered_lit_camera(1);
+        sys.boards[0].io = io;
+        meter = Some(m);
         sys.run_ms(600.0);
     }
     // The reflex needs a servo, positions and a map that stay fresh: the host feeds them
@@ -272,6 +278,7 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
     }
     sys.run_to_first_heartbeat(0);
     let hb0 = sys.heartbeat(board);
+    let busy0 = meter.as_ref().map(|m| m.get());
     let b = &mut sys.boards[0];
     let start = b.cycles;
     let end = start + (ms * CPU_HZ as f64 / 1000.0) as u64;
@@ -308,6 +315,10 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
         loops,
         functions,
         addresses,
+        busy: meter.zip(busy0).map(|(m, b0)| {
+            let b1 = m.get();
+            (b1.0 - b0.0, b1.1 - b0.1)
+        }),
     })
 }
 

@@ -35,6 +35,16 @@ pub trait Device {
     fn write16(&mut self, off: u32, val: u16, now: u64) -> bool;
 }
 
+/// A boxed device is a device: lets a wrapper (a meter) take any board's I/O as it is kept.
+impl<T: Device + ?Sized> Device for Box<T> {
+    fn read16(&mut self, off: u32, now: u64) -> Option<u16> {
+        (**self).read16(off, now)
+    }
+    fn write16(&mut self, off: u32, val: u16, now: u64) -> bool {
+        (**self).write16(off, val, now)
+    }
+}
+
 /// The bus one emulated board sees while it runs.
 pub struct BoardBus<'a> {
     /// Local RAM (1 MiB).

@@ -475,6 +475,12 @@ fn main() -> ExitCode {
                             CPU_HZ / 4000
                         );
                     }
+                    if let Some((busy, slots)) = p.busy {
+                        println!(
+                            "(busy {:.0} cycles a slot over {slots} slots; the rest of a slot waits for the timer)",
+                            busy as f64 / slots.max(1) as f64
+                        );
+                    }
                     println!("{:>10} {:>6} {:>12}  function", "cycles", "%", "per loop");
                     for (name, c) in p.functions.iter().take(top) {
                         println!(
