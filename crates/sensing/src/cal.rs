@@ -112,10 +112,15 @@ pub struct Checker {
     pub state: State,
     magic: u32,
     generation: u32,
-    /// Not 0 when the table being checked (or in use) has a step between neighbouring
-    /// inverse nodes that does not fit an i16 (kept out of [`State`] and [`Header`]: growing
-    /// those drew miscompiles of the M68k backend in the board's step).
+    /// Not 0 when the table in use has a step between neighbouring inverse nodes that does
+    /// not fit an i16 (kept out of [`State`] and [`Header`]: growing those drew miscompiles
+    /// of the M68k backend in the board's step).
     wide: u32,
+    /// The next word of the table in use whose steps are to be checked
+    /// ([`Self::step_steps`]).
+    steps_at: u32,
+    /// [`Self::word_steps_mask`], set when the last steps are checked.
+    word_mask: usize,
 }
 
 impl Default for Checker {
@@ -132,6 +137,8 @@ impl Checker {
             magic: 0,
             generation: 0,
             wide: 0,
+            steps_at: cal::INV,
+            word_mask: 0,
         }
     }
 
@@ -154,9 +161,26 @@ impl Checker {
     /// is given a null grid, and leaves the slot to the Rust, for a table with a wider
     /// step). A mask, not a flag: a test of a flag here drew a condition-code clobber on the
     /// 68k (docs/toolchain.md class 1).
+    #[inline(always)]
     pub fn word_steps_mask(&self) -> usize {
-        // 1 when any bit is set, then 1 - 1 = 0, or 0 - 1 = all ones.
-        (((self.wide | self.wide.wrapping_neg()) >> 31) as usize).wrapping_sub(1)
+        self.word_mask
+    }
+
+    /// One slot's share of the check of the steps between neighbouring inverse nodes of the
+    /// table in use ([`Self::word_steps_mask`]), once it is accepted and until every step is
+    /// checked. The sensing logic calls it in the slots the Rust processes: until the steps
+    /// are checked that is every slot (with the checksum, the extra reads slowed the check
+    /// so that the first positions came later; once they are, the common slot no longer
+    /// pays even the test).
+    pub fn step_steps(&mut self, t: &mut impl CalWords) {
+        if matches!(self.state, State::Good(_)) && self.steps_at < cal::WORDS {
+            let end = (self.steps_at + CHECK_WORDS).min(cal::WORDS);
+            self.wide |= check_steps(t, self.steps_at, end);
+            self.steps_at = end;
+            // 0 - 1 (all ones) when done with no wide step, else 0 (pending: 1 - 1).
+            let any = self.wide | (cal::WORDS - end);
+            self.word_mask = (((any | any.wrapping_neg()) >> 31) as usize).wrapping_sub(1);
+        }
     }
 
     /// One slot's share of the check. Returns `Some(reason)` when a table is refused.
@@ -168,6 +192,8 @@ impl Checker {
             self.generation = generation;
             self.state = State::Checking { at: 0, sum: 0 };
             self.wide = 0;
+            self.steps_at = cal::INV;
+            self.word_mask = 0;
         }
         let State::Checking { at, sum } = self.state else {
             return None;
@@ -179,8 +205,7 @@ impl Checker {
             }
         }
         let end = (at + CHECK_WORDS).min(cal::WORDS);
-        let (sum, bad_node, wide) = check_words(t, at, end, sum);
-        self.wide |= wide;
+        let (sum, bad_node) = check_words(t, at, end, sum);
         if bad_node {
             self.state = State::Bad(Reason::Node);
             return Some(Reason::Node);
@@ -233,16 +258,10 @@ fn header_fault(t: &mut impl CalWords) -> Option<Reason> {
 pub const MAX_WORD_STEP_UM: i32 = i16::MAX as i32;
 
 /// Runs the checksum over words `from..to` (skipping the checksum word) and checks inverse
-/// nodes' range and their steps from the node before in the row and the node above.
-/// Returns the checksum, whether a node was out of range, and not 0 when a step did not
-/// fit an i16 (-32768..=[`MAX_WORD_STEP_UM`]).
+/// nodes' range. Returns the checksum and whether a node was out of range.
 #[inline(never)]
-fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32, bool, u32) {
-    const ROW: u32 = 2 * cal::INV_N;
+fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32, bool) {
     let mut bad = false;
-    let mut wide = 0;
-    // The word's place in its row of (x, y) pairs: one division a call.
-    let mut in_row = from.saturating_sub(cal::INV) % ROW;
     let mut i = from;
     while i < to {
         let w = t.word(i);
@@ -252,20 +271,37 @@ fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32,
         if i >= cal::INV {
             let v = w as i32;
             bad |= !(-cal::MAX_NODE_UM..=cal::MAX_NODE_UM).contains(&v);
-            if in_row >= 2 {
-                wide |= wide_step(v, t.word(i - 2));
-            }
-            if i >= cal::INV + ROW {
-                wide |= wide_step(v, t.word(i - ROW));
-            }
-            in_row += 1;
-            if in_row == ROW {
-                in_row = 0;
-            }
         }
         i += 1;
     }
-    (sum, bad, wide)
+    (sum, bad)
+}
+
+/// Checks the steps of inverse-grid words `from..to` (at or after `cal::INV`) from the node
+/// before in the row and the node above. Returns not 0 when one does not fit an i16
+/// (-32768..=[`MAX_WORD_STEP_UM`]).
+#[inline(never)]
+fn check_steps(t: &mut impl CalWords, from: u32, to: u32) -> u32 {
+    const ROW: u32 = 2 * cal::INV_N;
+    let mut wide = 0;
+    // The word's place in its row of (x, y) pairs: one division a call.
+    let mut in_row = (from - cal::INV) % ROW;
+    let mut i = from;
+    while i < to {
+        let v = t.word(i) as i32;
+        if in_row >= 2 {
+            wide |= wide_step(v, t.word(i - 2));
+        }
+        if i >= cal::INV + ROW {
+            wide |= wide_step(v, t.word(i - ROW));
+        }
+        in_row += 1;
+        if in_row == ROW {
+            in_row = 0;
+        }
+        i += 1;
+    }
+    wide
 }
 
 /// Not 0 when the step from its neighbour's word `n` to node value `v` does not fit an i16

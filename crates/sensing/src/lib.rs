@@ -504,6 +504,9 @@ impl Sensing {
                 return (ev, publish.is_some());
             }
         }
+        // The table's steps, while they are unchecked (`Checker::step_steps`): until then
+        // the assembly is given no grid and every slot comes here.
+        self.checker.step_steps(cal);
         let b = conv.beacon as usize & 7;
         let raw = [s.x as i32 - 2048, s.y as i32 - 2048];
         let sum = s.sum as i32 - 2048;

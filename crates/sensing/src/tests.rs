@@ -86,13 +86,28 @@ fn a_good_table_is_accepted_after_its_words_are_read() {
 /// only when every step between neighbouring inverse nodes fits a word: one node moved so
 /// that a step along a row (x) or down a column (y) is one micrometre too wide clears the
 /// mask, one micrometre less keeps it, and a table of another generation is judged afresh.
-/// (The linear table steps 12.8 mm along both; a row's last node is not its next row's
-/// first node's neighbour, 819 mm away.)
+/// The steps are checked after the table is accepted (`Checker::step_steps`, in the slots
+/// the Rust takes: its first positions as soon as before); until then the mask is clear. (The linear table steps 12.8 mm along both; a
+/// row's last node is not its next row's first node's neighbour, 819 mm away.)
 #[test]
 fn only_tables_whose_node_steps_fit_a_word_go_to_the_word_lookup() {
     let mut c = Checker::new();
-    assert_eq!(check_fully(&mut c, &mut Words(linear_table())), None);
-    assert_eq!(c.word_steps_mask(), usize::MAX);
+    let mut t = Words(linear_table());
+    assert_eq!(check_fully(&mut c, &mut t), None);
+    assert!(c.header().is_some(), "in use");
+    assert_eq!(c.word_steps_mask(), 0, "steps not checked yet");
+    let slots = (fmt::WORDS - fmt::INV).div_ceil(cal::CHECK_WORDS);
+    for _ in 1..slots {
+        c.step_steps(&mut t);
+    }
+    assert_eq!(c.word_steps_mask(), 0, "the last steps not checked yet");
+    c.step_steps(&mut t);
+    assert_eq!(c.word_steps_mask(), usize::MAX, "every step checked");
+    let check_steps = |c: &mut Checker, t: &mut Words| {
+        for _ in 0..slots {
+            c.step_steps(t);
+        }
+    };
     let n = fmt::INV_N as usize;
     let step = cal::MAX_WORD_STEP_UM - 12_800;
     for (comp, by, wide) in [
@@ -106,16 +121,16 @@ fn only_tables_whose_node_steps_fit_a_word_go_to_the_word_lookup() {
         let k = fmt::INV as usize + 2 * (20 * n + 10) + comp;
         w[k] = (w[k] as i32 + by) as u32;
         w[fmt::W_CHECKSUM as usize] = cal::checksum(&w);
-        assert_eq!(
-            check_fully(&mut c, &mut Words(w)),
-            None,
-            "still a good table"
-        );
+        let mut t = Words(w);
+        assert_eq!(check_fully(&mut c, &mut t), None, "still a good table");
+        check_steps(&mut c, &mut t);
         assert!(c.header().is_some());
         let mask = if wide { 0 } else { usize::MAX };
         assert_eq!(c.word_steps_mask(), mask, "component {comp} moved {by} um");
     }
-    assert_eq!(check_fully(&mut c, &mut Words(linear_table())), None);
+    let mut t = Words(linear_table());
+    assert_eq!(check_fully(&mut c, &mut t), None);
+    check_steps(&mut c, &mut t);
     assert_eq!(
         c.word_steps_mask(),
         usize::MAX,
