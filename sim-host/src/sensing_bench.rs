@@ -406,7 +406,10 @@ fn resting_tip_urad() -> [i32; 2] {
     let a = ((r2 + l1 * l1 - l2 * l2) / (2.0 * l1 * r2.sqrt())).acos();
     let t1 = phi + a;
     let (ex, ey) = (x - l1 * t1.cos(), y - l1 * t1.sin());
-    [(t1 * 1e6).round() as i32, (ey.atan2(ex) * 1e6).round() as i32]
+    [
+        (t1 * 1e6).round() as i32,
+        (ey.atan2(ex) * 1e6).round() as i32,
+    ]
 }
 
 /// Measures [`ImageRate`] over one emulated second, after 1.2 s of start-up (the table's
@@ -531,7 +534,10 @@ pub fn report(out: &std::path::Path, size: Size, seed: u64) -> Result<String, St
         Ok((a, b)) => {
             for (m, case) in [
                 (a, "no servo state (no drift learnt or corrected)"),
-                (b, "the arm resting, the drift learnt from the tip and corrected"),
+                (
+                    b,
+                    "the arm resting, the drift learnt from the tip and corrected",
+                ),
             ] {
                 let hz = m.frames_hz;
                 let _ = writeln!(

@@ -7,13 +7,23 @@
 //! scan recorded at that position (the forward grid). Per axis the model is
 //! `measured = expected + o + g * expected` (signals in Q5 codes about mid-scale, where the
 //! optical axis is); `o` and `g` are learnt by normalised least-mean-squares with steps
-//! 1/256 (offset) and 1/256 of the signal's full scale squared (gain), i.e. a time
-//! constant of 256 tip observations (0.5 s of rest) for the offset. Thermal drift changes
-//! over minutes, so the estimate follows it with room to spare; its own noise averages over
-//! the same 256 observations. Every beacon's signals are corrected before the inverse grid.
+//! 1/32 (offset) and 1/32 of the signal's full scale squared (gain), from one tip
+//! observation every [`LEARN_EVERY_FRAMES`] strobe frames at rest (16 ms): a time constant
+//! of 32 observations, 0.5 s of rest, for the offset. Thermal drift changes over minutes, so
+//! the estimate follows it with room to spare; its own noise averages over the same 0.5 s
+//! (each observation is the filter's 256-sample mean: consecutive frames' are nearly the
+//! same). Learning from every frame, with steps 1/256, cost the 68020 a quarter of the
+//! slot budget at rest (sin and cos of both links, the forward grid, the step: about 7,900
+//! cycles a frame). Every beacon's signals are corrected before the inverse grid.
 //!
 //! Offset alone is observable from one resting place; the gain needs rests at different
 //! places, which a working arm provides (the bench tours a few).
+
+/// Strobe frames between the tip observations the estimate learns from while the arm
+/// rests (the step sizes below are scaled to it: a power of two, [`LEARN_SHIFT`]).
+pub const LEARN_EVERY_FRAMES: u32 = 1 << LEARN_SHIFT;
+/// log2 of [`LEARN_EVERY_FRAMES`].
+pub const LEARN_SHIFT: u32 = 3;
 
 /// Largest offset accepted, Q5 codes (256 codes, about 50 mm): beyond it the estimate is
 /// implausible and held.
@@ -84,9 +94,10 @@ fn correct_axis(v: i32, o_q13: i32, g_q24: i32) -> i32 {
 #[inline(never)]
 fn observe_axis(o_q13: &mut i32, g_q24: &mut i32, measured: i32, expected: i32) -> u32 {
     let r = measured - expected - (*o_q13 >> 8) - fx::mul_shr(*g_q24, expected, 24);
-    let o = *o_q13 + r;
-    // Gain step: r * e / 2^14 in Q24 = (1/256) * r * e / (2^15)^2, 2^15 the Q5 half scale.
-    let g = *g_q24 + fx::mul_shr(r, expected, 14);
+    // Offset step: r / 32 in Q5 is r << 3 in Q13.
+    let o = *o_q13 + (r << LEARN_SHIFT);
+    // Gain step: r * e / 2^11 in Q24 = (1/32) * r * e / (2^15)^2, 2^15 the Q5 half scale.
+    let g = *g_q24 + fx::mul_shr(r, expected, 14 - LEARN_SHIFT);
     let lim_o = MAX_OFFSET_Q5 << 8;
     let oc = o.clamp(-lim_o, lim_o);
     let gc = g.clamp(-MAX_GAIN_Q24, MAX_GAIN_Q24);

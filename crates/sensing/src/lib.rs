@@ -322,6 +322,8 @@ pub struct Sensing {
     servo_loops: u32,
     servo_same: u16,
     servo_stale: bool,
+    /// Frames at rest since the drift estimate last learnt (`drift::LEARN_EVERY_FRAMES`).
+    learn_age: u32,
 }
 
 impl Default for Sensing {
@@ -358,6 +360,7 @@ impl Sensing {
             servo_loops: 0,
             servo_same: 0,
             servo_stale: false,
+            learn_age: 0,
             objects: ObjectTable {
                 frame: 0,
                 beacons: [Beacon {
@@ -619,8 +622,9 @@ impl Sensing {
         }
     }
 
-    /// The tip as the drift reference: learns from it while the arm rests. Once a frame, so
-    /// not inlined (inlined into `step`, its saturating adds drew condition-code clobbers;
+    /// The tip as the drift reference: learns from it while the arm rests, one observation
+    /// every `drift::LEARN_EVERY_FRAMES` frames. Called once a frame, so not inlined
+    /// (inlined into `step`, its saturating adds drew condition-code clobbers;
     /// docs/toolchain.md class 1).
     #[inline(never)]
     fn reference(
@@ -670,6 +674,13 @@ impl Sensing {
         {
             return 0;
         }
+        // One observation every few frames (drift::LEARN_EVERY_FRAMES): the steps are sized
+        // for it.
+        self.learn_age += 1;
+        if self.learn_age < drift::LEARN_EVERY_FRAMES {
+            return 0;
+        }
+        self.learn_age = 0;
         let Some(h) = self.checker.header() else {
             return 0;
         };
