@@ -774,14 +774,14 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
         for _ in 0..3_000 {
             let span = if r(4) == 0 { 1 << 18 } else { 70_000 };
             let v = [r(span) as i32, r(span) as i32];
-            let drift = Drift {
-                o_q13: [
+            let drift = Drift::with(
+                [
                     r((MAX_OFFSET_Q5 << 8) as i64) as i32,
                     r((MAX_OFFSET_Q5 << 8) as i64) as i32,
                 ],
-                g_q24: [r(MAX_GAIN_Q24 as i64) as i32, r(MAX_GAIN_Q24 as i64) as i32],
-                observations: 1,
-            };
+                [r(MAX_GAIN_Q24 as i64) as i32, r(MAX_GAIN_Q24 as i64) as i32],
+                1,
+            );
             let correct = (r(1) == 0) as u32;
             let mut area = [
                 r(400_000) as i32 - 300_000,
@@ -806,6 +806,10 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
             let want = sensing::locate_um(&mut inv, v, &drift, correct, &area);
             for (n, w) in drift.o_q13.iter().chain(&drift.g_q24).enumerate() {
                 put(&mut b.ram, drift_at + 4 * n as u32, *w);
+            }
+            for (n, w) in drift.k_q14.iter().enumerate() {
+                let at = drift_at + sensing::drift::layout::K_Q14 as u32 + 4 * n as u32;
+                put(&mut b.ram, at, *w);
             }
             for (n, w) in area.iter().enumerate() {
                 put(&mut b.ram, area_at + 4 * n as u32, *w);

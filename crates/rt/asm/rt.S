@@ -745,28 +745,20 @@ __sense_filter:
  * Rust (tests/tests/firmware_functions.rs). Drift offsets: crates/sensing/src/drift.rs
  * `layout` (asserted there). */
     .set    D_O_Q13, 0              /* Drift::o_q13 (x, y) */
-    .set    D_G_Q24, 8              /* Drift::g_q24 (x, y) */
+    .set    D_K_Q14, 20             /* Drift::k_q14 (x, y): 1 / (1 + g), Q14 */
     .set    AREA_MARGIN_UM, 5000    /* sensing::AREA_MARGIN_UM */
     .set    INV_ROW, 520            /* bytes of an inverse grid row: 2 * INV_N words */
     .set    INV_TOP, 131071         /* (64 << 11) - 1: the grid's last Q5 signal */
 
-/* CORRECT v, o, g: v = Drift's correct_axis(v, o, g); d2, d3 scratch. u = v - (o >> 8),
- * g16 = g >> 8, gu = (g16 u) >> 16, v = u - gu + ((g16 gu) >> 16); products as i32. */
-.macro CORRECT v, o, g
+/* CORRECT v, o, k: v = Drift's correct_axis(v, o, k) = ((v - (o >> 8)) k) >> 14, the
+ * product as i32 (wrapping); d2 scratch. */
+.macro CORRECT v, o, k
     move.l  \o, %d2
     asr.l   #8, %d2
     sub.l   %d2, \v
-    move.l  \g, %d3
-    asr.l   #8, %d3
-    move.l  %d3, %d2
-    muls.l  \v, %d2
-    swap    %d2
-    ext.l   %d2                     /* (g16 u) >> 16 */
-    sub.l   %d2, \v
-    muls.l  %d3, %d2
-    swap    %d2
-    ext.l   %d2
-    add.l   %d2, \v
+    muls.l  \k, \v
+    moveq   #14, %d2
+    asr.l   %d2, \v
 .endm
 
 /* INVCELL v, f: v = the inverse cell's index of signal v, f its Q10 fraction (cal's
@@ -820,8 +812,8 @@ __sense_filter:
     movea.l \a+12(%sp), %a0            /* drift */
     cmpa.w  #0, %a0
     beq.s   1f
-    CORRECT %d0, D_O_Q13(%a0), D_G_Q24(%a0)
-    CORRECT %d1, D_O_Q13+4(%a0), D_G_Q24+4(%a0)
+    CORRECT %d0, D_O_Q13(%a0), D_K_Q14(%a0)
+    CORRECT %d1, D_O_Q13+4(%a0), D_K_Q14+4(%a0)
 1:  INVCELL %d0, %d2                /* i, fx */
     INVCELL %d1, %d3                /* j, fy */
     movea.l \a+0(%sp), %a0            /* the cell: inv + j * INV_ROW + i * 8 */
@@ -926,12 +918,12 @@ __sense_feedback:
     .set    S_RAW_FRAME, 8516       /* Sensing::raw.frame */
     .set    S_RAW_B, 8520           /* Sensing::raw.beacons: 16 bytes each */
     .set    S_DRIFT, 8648           /* Sensing::drift (observations 16 bytes on) */
-    .set    S_OPT, 8668             /* Sensing::config.options (u32) */
-    .set    S_SREF, 8672            /* Sensing::config.s_ref_codes */
-    .set    S_LEVEL, 8676           /* Sensing::config.level_ma */
-    .set    S_PREV_RAW, 8680        /* Sensing::prev_raw (x, y) */
-    .set    S_LEVELS, 8688          /* Sensing::levels: u16 each */
-    .set    S_PREV_NEXT, 8704       /* Sensing::prev_next (u8) */
+    .set    S_OPT, 8676             /* Sensing::config.options (u32) */
+    .set    S_SREF, 8680            /* Sensing::config.s_ref_codes */
+    .set    S_LEVEL, 8684           /* Sensing::config.level_ma */
+    .set    S_PREV_RAW, 8688        /* Sensing::prev_raw (x, y) */
+    .set    S_LEVELS, 8696          /* Sensing::levels: u16 each */
+    .set    S_PREV_NEXT, 8712       /* Sensing::prev_next (u8) */
     .set    T_XTALK, 1028           /* Tables::crosstalk_q16 */
     .set    FILTER_BYTES, 1048      /* sensing::filter::layout::FILTER_BYTES */
 /* SEQ_ODD seq: d0 = the sequence word at (seq) made odd, (s | 1) + ((s & 1) << 1) as

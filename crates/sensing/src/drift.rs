@@ -32,8 +32,8 @@ pub const MAX_OFFSET_Q5: i32 = 256 << 5;
 pub const MAX_GAIN_Q24: i32 = (1 << 24) / 20;
 
 /// The drift estimate of both axes. `repr(C)`: `__sense_locate` (the runtime's assembly)
-/// reads the offsets and gains at the offsets [`layout`] asserts.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// reads the offsets and the correction's factors at the offsets [`layout`] asserts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C)]
 pub struct Drift {
     /// Offsets, Q5 codes times 256 (the LMS accumulator).
@@ -42,9 +42,40 @@ pub struct Drift {
     pub g_q24: [i32; 2],
     /// Observations used.
     pub observations: u32,
+    /// The correction's factors, 1 / (1 + g) in Q14, set with the gains ([`Self::with`]):
+    /// one product an axis where the correction runs (every beacon, every slot), the
+    /// division once an observation.
+    pub k_q14: [i32; 2],
+}
+
+impl Default for Drift {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Drift {
+    /// No drift learnt: offsets and gains 0.
+    pub const fn new() -> Self {
+        Self {
+            o_q13: [0; 2],
+            g_q24: [0; 2],
+            observations: 0,
+            k_q14: [1 << 14; 2],
+        }
+    }
+
+    /// An estimate of offsets `o_q13` and gain errors `g_q24` (within +-[`MAX_GAIN_Q24`])
+    /// from `observations`, with its correction factors.
+    pub fn with(o_q13: [i32; 2], g_q24: [i32; 2], observations: u32) -> Self {
+        Self {
+            o_q13,
+            g_q24,
+            observations,
+            k_q14: [factor_q14(g_q24[0]), factor_q14(g_q24[1])],
+        }
+    }
+
     /// The offsets, Q5 codes.
     pub fn offset_q5(&self) -> [i32; 2] {
         [self.o_q13[0] >> 8, self.o_q13[1] >> 8]
@@ -53,8 +84,8 @@ impl Drift {
     /// Removes the drift from measured signals.
     pub fn correct(&self, v_q5: [i32; 2]) -> [i32; 2] {
         [
-            correct_axis(v_q5[0], self.o_q13[0], self.g_q24[0]),
-            correct_axis(v_q5[1], self.o_q13[1], self.g_q24[1]),
+            correct_axis(v_q5[0], self.o_q13[0], self.k_q14[0]),
+            correct_axis(v_q5[1], self.o_q13[1], self.k_q14[1]),
         ]
     }
 
@@ -76,18 +107,25 @@ impl Drift {
             measured_q5[1],
             expected_q5[1],
         );
+        self.k_q14 = [factor_q14(self.g_q24[0]), factor_q14(self.g_q24[1])];
         a | b
     }
 }
 
-/// (v - o) / (1 + g) to second order in g (|g| <= 5 %: the third-order term is under
-/// 0.2 Q5 codes). In 32-bit products: the gain in Q16 (|g| < 2^12) times a signal (< 2^17).
+/// 1 / (1 + g) in Q14 for a gain error `g_q24` within +-[`MAX_GAIN_Q24`] (1 + g in Q14
+/// between 15,565 and 17,203), rounded (`fx::div`: no compiled divide in firmware).
+fn factor_q14(g_q24: i32) -> i32 {
+    let one_plus_g_q14 = (1 << 14) + (g_q24 >> 10);
+    fx::div((1 << 28) + (one_plus_g_q14 >> 1), one_plus_g_q14)
+}
+
+/// (v - o) / (1 + g) as (v - o) k >> 14, k = 1 / (1 + g) in Q14 (rounding k moves a signal
+/// by under 2.3 Q5 codes; the second-order series this replaces needed two products). The
+/// product fits 32 bits for the converter's signals (|v - o| < 2^17, k < 17,300); beyond,
+/// it wraps, as the 68020's `MULS.L` does.
 #[inline(always)]
-fn correct_axis(v: i32, o_q13: i32, g_q24: i32) -> i32 {
-    let u = v - (o_q13 >> 8);
-    let g_q16 = g_q24 >> 8;
-    let gu = (g_q16 * u) >> 16;
-    u - gu + ((g_q16 * gu) >> 16)
+fn correct_axis(v: i32, o_q13: i32, k_q14: i32) -> i32 {
+    (v - (o_q13 >> 8)).wrapping_mul(k_q14) >> 14
 }
 
 /// One axis's LMS step; 1 if a bound clipped it, else 0.
@@ -116,6 +154,9 @@ pub mod layout {
     pub const O_Q13: usize = 0;
     /// `g_q24` (two words).
     pub const G_Q24: usize = 8;
+    /// `k_q14` (two words).
+    pub const K_Q14: usize = 20;
     const _: () = assert!(offset_of!(Drift, o_q13) == O_Q13);
     const _: () = assert!(offset_of!(Drift, g_q24) == G_Q24);
+    const _: () = assert!(offset_of!(Drift, k_q14) == K_Q14);
 }

@@ -350,11 +350,7 @@ impl Sensing {
             filters: [Filter::new(); BEACONS],
             config: Config::DEFAULT,
             checker: Checker::new(),
-            drift: Drift {
-                o_q13: [0; 2],
-                g_q24: [0; 2],
-                observations: 0,
-            },
+            drift: Drift::new(),
             rest: 0,
             rest_theta: [0; 2],
             servo_loops: 0,
@@ -736,13 +732,13 @@ pub mod layout {
     const _: () = assert!(offset_of!(RawBeacon, level_ma) == 12);
     const _: () = assert!(offset_of!(Sensing, drift) == 8648);
     const _: () = assert!(offset_of!(super::Drift, observations) == 16);
-    const _: () = assert!(offset_of!(Sensing, config) == 8668);
+    const _: () = assert!(offset_of!(Sensing, config) == 8676);
     const _: () = assert!(offset_of!(Config, options) == 0);
     const _: () = assert!(offset_of!(Config, s_ref_codes) == 4);
     const _: () = assert!(offset_of!(Config, level_ma) == 8);
-    const _: () = assert!(offset_of!(Sensing, prev_raw) == 8680);
-    const _: () = assert!(offset_of!(Sensing, levels) == 8688);
-    const _: () = assert!(offset_of!(Sensing, prev_next) == 8704);
+    const _: () = assert!(offset_of!(Sensing, prev_raw) == 8688);
+    const _: () = assert!(offset_of!(Sensing, levels) == 8696);
+    const _: () = assert!(offset_of!(Sensing, prev_next) == 8712);
     const _: () = assert!(offset_of!(Conversion, t_us) == 0);
     const _: () = assert!(offset_of!(Conversion, lit_ticks) == 4);
     const _: () = assert!(offset_of!(Conversion, beacon) == 6);
