@@ -244,17 +244,29 @@ pub struct Profile {
 /// finish its table check), waits for its first heartbeat, then executes `ms` milliseconds of
 /// emulated time one instruction at a time, charging each instruction's cycles to the
 /// function (nearest symbol at or below the PC) it belongs to.
-pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageError> {
+///
+/// `resting` (the sensing board): the host also publishes a servo state every 0.25 ms with
+/// the arm resting, its tip at the tip's lit beacon (`sensing_bench::RestingServo`), from
+/// power-up on: the board learns the drift from the tip and corrects every beacon.
+pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Profile, ImageError> {
     let image = Image::load(&dir.join(format!("{}.elf", image_name(board))))?;
     let mut per = FunctionCycles::new(&image);
     let mut sys = System::power_up(dir, &[board])?;
     let mut meter = None;
+    let mut servo_feed = crate::sensing_bench::RestingServo::default();
     if board == BoardId::Sensing {
         // Eight beacons in view, and past the calibration table's check: the steady state.
         let (io, m) = crate::sensing_bench::metered_lit_camera(1);
         sys.boards[0].io = io;
         meter = Some(m);
-        sys.run_ms(600.0);
+        // 1.2 s with a resting arm: the drift reference starts learning after 0.53 s of
+        // rest and a full filter window.
+        for _ in 0..if resting { 4800 } else { 2400 } {
+            if resting {
+                servo_feed.publish(&mut sys.bus());
+            }
+            sys.run_cycles(CPU_HZ / 4000);
+        }
     }
     // The reflex needs a servo, positions and a map that stay fresh: the host feeds them
     // every 0.25 ms (the free-space case at rest of `sim-host bench reflex`).
@@ -293,6 +305,9 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64) -> Result<Profile, ImageErro
         e.1 += 1;
         if b.cycles >= next_feed {
             next_feed += quarter_ms;
+            if resting {
+                servo_feed.publish(&mut ArrayBus::new(&mut sys.global));
+            }
             if let Some(f) = feed.as_mut() {
                 f.apply(&mut ArrayBus::new(&mut sys.global));
             }

@@ -163,6 +163,11 @@ enum Cmd {
         /// Functions to list.
         #[arg(long, default_value_t = 15)]
         top: usize,
+        /// The sensing board with a servo state of an arm resting, its tip at the tip's
+        /// lit beacon: the drift learnt from the tip and corrected (the running system at
+        /// rest).
+        #[arg(long)]
+        resting: bool,
         /// Also list this many costliest instruction addresses (with their function), to
         /// read beside `m68k-linux-gnu-objdump -d` of the image.
         #[arg(long, default_value_t = 0)]
@@ -450,14 +455,19 @@ fn main() -> ExitCode {
             images,
             ms,
             top,
+            resting,
             addresses,
         } => {
             let Some(id) = parse_board(&board) else {
                 eprintln!("sim-host: unknown board {board:?} ({BOARD_NAMES})");
                 return ExitCode::from(2);
             };
+            if resting && id != BoardId::Sensing {
+                eprintln!("sim-host: --resting is for the sensing board");
+                return ExitCode::from(2);
+            }
             let dir = images.unwrap_or_else(default_images_dir);
-            match sim_host::boot::profile(&dir, id, ms) {
+            match sim_host::boot::profile(&dir, id, ms, resting) {
                 Ok(p) => {
                     let per = p.cycles as f64 / p.loops.max(1) as f64;
                     println!(

@@ -412,6 +412,34 @@ fn resting_tip_urad() -> [i32; 2] {
     ]
 }
 
+/// The host as a servo board holding the arm at rest with the tip at its lit beacon
+/// ([`resting_tip_urad`]): one servo state record a call (call it every 0.25 ms).
+#[derive(Debug, Default)]
+pub struct RestingServo {
+    loops: u32,
+}
+
+impl RestingServo {
+    /// Publishes the next servo state.
+    pub fn publish(&mut self, bus: &mut dyn vme_map::GlobalBus) {
+        let theta = resting_tip_urad();
+        self.loops = self.loops.wrapping_add(1);
+        let st = vme_map::records::ServoState {
+            theta1_urad: theta[0],
+            theta2_urad: theta[1],
+            omega1_urad_s: 0,
+            omega2_urad_s: 0,
+            arrest1_urad: theta[0],
+            arrest2_urad: theta[1],
+            torque1_mnm: 0,
+            torque2_mnm: 0,
+            t_us: self.loops.wrapping_mul(250),
+            loops: self.loops,
+        };
+        vme_map::SERVO_STATE.publish(bus, &st);
+    }
+}
+
 /// Measures [`ImageRate`] over one emulated second, after 1.2 s of start-up (the table's
 /// check done). With `servo`, the host publishes a servo state every 0.25 ms with the arm
 /// resting where the tip's beacon is: the board then learns the drift from the tip once a
@@ -422,26 +450,12 @@ pub fn image_rate(dir: &std::path::Path, servo: bool) -> Result<ImageRate, Strin
         crate::boot::System::power_up(dir, &[BoardId::Sensing]).map_err(|e| e.to_string())?;
     let (io, meter) = metered_lit_camera(1);
     sys.boards[0].io = io;
-    let theta = resting_tip_urad();
-    let mut loops = 0u32;
+    let mut feed = RestingServo::default();
     let mut run_ms = |sys: &mut crate::boot::System, ms: f64| {
         let quarter = crate::emu::CPU_HZ / 4000;
         for _ in 0..(ms * 4.0).round() as u32 {
             if servo {
-                loops += 1;
-                let st = vme_map::records::ServoState {
-                    theta1_urad: theta[0],
-                    theta2_urad: theta[1],
-                    omega1_urad_s: 0,
-                    omega2_urad_s: 0,
-                    arrest1_urad: theta[0],
-                    arrest2_urad: theta[1],
-                    torque1_mnm: 0,
-                    torque2_mnm: 0,
-                    t_us: loops.wrapping_mul(250),
-                    loops,
-                };
-                vme_map::SERVO_STATE.publish(&mut sys.bus(), &st);
+                feed.publish(&mut sys.bus());
             }
             sys.run_cycles(quarter);
         }
