@@ -92,10 +92,58 @@ fn host_run(inputs: &[u32], global: &mut [u8]) -> Vec<i32> {
 /// flags, events) gives the host's results bit for bit over 5000 scripted slots.
 #[test]
 fn the_sensing_image_steps_like_the_host() {
+    let table = sensing_cal::model_table(&Camera::new(OpticsConfig::default(), 1));
+    let seen = image_against_host(&table);
+    // The script reached every path worth comparing.
+    assert!(
+        seen.iter().all(|&c| c > 0),
+        "valid, occluded, saturated, corrected, valid uncorrected, moving, filling: {seen:?}"
+    );
+}
+
+/// A table with a step between neighbouring inverse nodes wider than an i16 (the model's
+/// with every node from column 33 on moved 22 mm in x: the cells of column 32, which
+/// beacons 3 and 4 of the script fall in, step over 33 mm) is looked up by the Rust on the
+/// image too, not by the common slot's 16 x 16-bit products: the image still gives the
+/// host's results bit for bit (those products would wrap there).
+#[test]
+fn a_table_with_a_wide_step_is_looked_up_in_32_bits_on_the_image_too() {
+    use vme_map::records::cal::{INV, INV_N};
+    let mut table = sensing_cal::model_table(&Camera::new(OpticsConfig::default(), 1));
+    let n = INV_N as usize;
+    for j in 0..n {
+        for i in 33..n {
+            let k = INV as usize + 2 * (j * n + i);
+            table[k] = (table[k] as i32 + 22_000) as u32;
+        }
+    }
+    // The host's checker finds it good, and wide.
+    struct Words<'a>(&'a [u32]);
+    impl sensing::cal::CalWords for Words<'_> {
+        fn word(&mut self, i: u32) -> u32 {
+            self.0[i as usize]
+        }
+    }
+    let mut w = table.clone();
+    w[vme_map::records::cal::W_CHECKSUM as usize] = sensing::cal::checksum(&w);
+    let mut c = sensing::cal::Checker::new();
+    for _ in 0..2 * vme_map::records::cal::WORDS / sensing::cal::CHECK_WORDS {
+        assert_eq!(c.step(&mut Words(&w)), None);
+        c.step_steps(&mut Words(&w));
+    }
+    assert!(c.header().is_some(), "a good table");
+    assert_eq!(c.word_steps_mask(), 0, "with a wide step");
+    let seen = image_against_host(&table);
+    assert!(seen[0] > 1000, "{} valid positions compared", seen[0]);
+}
+
+/// Runs the script on the sensing image (its probe) and on the host with `table` in global
+/// RAM, asserts every slot's words equal, and counts the host's slots with flags: valid,
+/// occluded, saturated, corrected, valid uncorrected, moving, filling.
+fn image_against_host(table: &[u32]) -> [usize; 7] {
     let img = Image::load(&images_dir().join("sensing.elf")).unwrap();
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let table = sensing_cal::model_table(&Camera::new(OpticsConfig::default(), 1));
-    sensing_cal::write_table(&mut vme_map::ArrayBus::new(&mut global), &table, 3);
+    sensing_cal::write_table(&mut vme_map::ArrayBus::new(&mut global), table, 3);
     // The host starts from the same global RAM (the probe publishes into it).
     let mut host_global = global.clone();
     let mut b = EmuBoard::new(
@@ -146,11 +194,7 @@ fn the_sensing_image_steps_like_the_host() {
         seen[5] += (flags & bf::MOVING != 0) as usize;
         seen[6] += (flags & (bf::VALID | bf::FILLING) == bf::FILLING) as usize;
     }
-    // The script reached every path worth comparing.
-    assert!(
-        seen.iter().all(|&c| c > 0),
-        "valid, occluded, saturated, corrected, valid uncorrected, moving, filling: {seen:?}"
-    );
+    seen
 }
 
 /// Runs a scenario of the sensing and servo boards with beacon 2 hidden or saturated from

@@ -121,6 +121,9 @@ pub struct Checker {
     steps_at: u32,
     /// [`Self::word_steps_mask`], set when the last steps are checked.
     word_mask: usize,
+    /// `steps_at`'s place in its row of the inverse grid (kept, not divided out: a compiled
+    /// `%` on the 68020 is a library call, and divides are suspect, docs/toolchain.md class 5).
+    steps_in_row: u32,
 }
 
 impl Default for Checker {
@@ -139,6 +142,7 @@ impl Checker {
             wide: 0,
             steps_at: cal::INV,
             word_mask: 0,
+            steps_in_row: 0,
         }
     }
 
@@ -157,10 +161,10 @@ impl Checker {
 
     /// All ones when every step between neighbouring inverse nodes of the table (along a
     /// row or a column, either component) fits an i16 (-32768..=[`MAX_WORD_STEP_UM`] um),
-    /// else 0: the lookup's products then fit 16 x 16 bits, as the common slot's assembly takes them (it
-    /// is given a null grid, and leaves the slot to the Rust, for a table with a wider
-    /// step). A mask, not a flag: a test of a flag here drew a condition-code clobber on the
-    /// 68k (docs/toolchain.md class 1).
+    /// else 0: the lookup's products then fit 16 x 16 bits, as the common slot's assembly
+    /// takes them (it is given a null grid, and leaves the slot to the Rust, for a table with
+    /// a wider step). A mask, not a flag: a test of a flag here drew a condition-code clobber
+    /// on the 68k (docs/toolchain.md class 1).
     #[inline(always)]
     pub fn word_steps_mask(&self) -> usize {
         self.word_mask
@@ -175,7 +179,15 @@ impl Checker {
     pub fn step_steps(&mut self, t: &mut impl CalWords) {
         if matches!(self.state, State::Good(_)) && self.steps_at < cal::WORDS {
             let end = (self.steps_at + CHECK_WORDS).min(cal::WORDS);
-            self.wide |= check_steps(t, self.steps_at, end);
+            self.wide |= check_steps(t, self.steps_at, end, self.steps_in_row);
+            // At most CHECK_WORDS < a row on: one wrap at most.
+            const _: () = assert!(CHECK_WORDS < 2 * cal::INV_N);
+            let in_row = self.steps_in_row + (end - self.steps_at);
+            self.steps_in_row = if in_row >= 2 * cal::INV_N {
+                in_row - 2 * cal::INV_N
+            } else {
+                in_row
+            };
             self.steps_at = end;
             // 0 - 1 (all ones) when done with no wide step, else 0 (pending: 1 - 1).
             let any = self.wide | (cal::WORDS - end);
@@ -194,6 +206,7 @@ impl Checker {
             self.wide = 0;
             self.steps_at = cal::INV;
             self.word_mask = 0;
+            self.steps_in_row = 0;
         }
         let State::Checking { at, sum } = self.state else {
             return None;
@@ -277,15 +290,13 @@ fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32,
     (sum, bad)
 }
 
-/// Checks the steps of inverse-grid words `from..to` (at or after `cal::INV`) from the node
-/// before in the row and the node above. Returns not 0 when one does not fit an i16
-/// (-32768..=[`MAX_WORD_STEP_UM`]).
+/// Checks the steps of inverse-grid words `from..to` (at or after `cal::INV`; `from` is
+/// word `in_row` of its row of (x, y) pairs) from the node before in the row and the node
+/// above. Returns not 0 when one does not fit an i16 (-32768..=[`MAX_WORD_STEP_UM`]).
 #[inline(never)]
-fn check_steps(t: &mut impl CalWords, from: u32, to: u32) -> u32 {
+fn check_steps(t: &mut impl CalWords, from: u32, to: u32, mut in_row: u32) -> u32 {
     const ROW: u32 = 2 * cal::INV_N;
     let mut wide = 0;
-    // The word's place in its row of (x, y) pairs: one division a call.
-    let mut in_row = (from - cal::INV) % ROW;
     let mut i = from;
     while i < to {
         let v = t.word(i) as i32;

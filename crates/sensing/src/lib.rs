@@ -548,7 +548,10 @@ impl Sensing {
         let est = valid.then_some(e);
         let rb = &mut self.raw.beacons[b];
         rb.sum_codes = sum;
-        rb.level_ma = self.levels[b] as u32;
+        // Through a compiler barrier: LLVM's M68k backend applied this widening's mask to
+        // another register and stored the level with garbage above it (docs/toolchain.md,
+        // class 12).
+        rb.level_ma = core::hint::black_box(self.levels[b]) as u32;
         if let Some(e) = est {
             rb.x_q5 = e.q5[0];
             rb.y_q5 = e.q5[1];
