@@ -261,12 +261,8 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
         meter = Some(m);
         // 1.2 s with a resting arm: the drift reference starts learning after 0.53 s of
         // rest and a full filter window.
-        for _ in 0..if resting { 4800 } else { 2400 } {
-            if resting {
-                servo_feed.publish(&mut sys.bus());
-            }
-            sys.run_cycles(CPU_HZ / 4000);
-        }
+        let ms = if resting { 1200.0 } else { 600.0 };
+        crate::sensing_bench::run_fed(&mut sys, ms, resting.then_some(&mut servo_feed));
     }
     // The reflex needs a servo, positions and a map that stay fresh: the host feeds them
     // every 0.25 ms (the free-space case at rest of `sim-host bench reflex`).

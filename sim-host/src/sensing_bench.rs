@@ -414,15 +414,25 @@ fn resting_tip_urad() -> [i32; 2] {
 
 /// The host as a servo board holding the arm at rest with the tip at its lit beacon
 /// ([`resting_tip_urad`]): one servo state record a call (call it every 0.25 ms).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct RestingServo {
+    theta_urad: [i32; 2],
     loops: u32,
+}
+
+impl Default for RestingServo {
+    fn default() -> Self {
+        Self {
+            theta_urad: resting_tip_urad(),
+            loops: 0,
+        }
+    }
 }
 
 impl RestingServo {
     /// Publishes the next servo state.
     pub fn publish(&mut self, bus: &mut dyn vme_map::GlobalBus) {
-        let theta = resting_tip_urad();
+        let theta = self.theta_urad;
         self.loops = self.loops.wrapping_add(1);
         let st = vme_map::records::ServoState {
             theta1_urad: theta[0],
@@ -440,6 +450,17 @@ impl RestingServo {
     }
 }
 
+/// Runs `sys` for `ms` emulated milliseconds in quarter-millisecond steps, publishing
+/// `servo`'s next state before each step when there is one.
+pub fn run_fed(sys: &mut crate::boot::System, ms: f64, mut servo: Option<&mut RestingServo>) {
+    for _ in 0..(ms * 4.0).round() as u32 {
+        if let Some(s) = servo.as_deref_mut() {
+            s.publish(&mut sys.bus());
+        }
+        sys.run_cycles(crate::emu::CPU_HZ / 4000);
+    }
+}
+
 /// Measures [`ImageRate`] over one emulated second, after 1.2 s of start-up (the table's
 /// check done). With `servo`, the host publishes a servo state every 0.25 ms with the arm
 /// resting where the tip's beacon is: the board then learns the drift from the tip once a
@@ -450,17 +471,8 @@ pub fn image_rate(dir: &std::path::Path, servo: bool) -> Result<ImageRate, Strin
         crate::boot::System::power_up(dir, &[BoardId::Sensing]).map_err(|e| e.to_string())?;
     let (io, meter) = metered_lit_camera(1);
     sys.boards[0].io = io;
-    let mut feed = RestingServo::default();
-    let mut run_ms = |sys: &mut crate::boot::System, ms: f64| {
-        let quarter = crate::emu::CPU_HZ / 4000;
-        for _ in 0..(ms * 4.0).round() as u32 {
-            if servo {
-                feed.publish(&mut sys.bus());
-            }
-            sys.run_cycles(quarter);
-        }
-    };
-    run_ms(&mut sys, 1200.0);
+    let mut feed = servo.then(RestingServo::default);
+    run_fed(&mut sys, 1200.0, feed.as_mut());
     let m0 = meter.get();
     // The object table's frame count and the board's heartbeat (one beat a strobe frame).
     let count = |sys: &mut crate::boot::System| -> Result<(u32, u32), String> {
@@ -472,7 +484,7 @@ pub fn image_rate(dir: &std::path::Path, servo: bool) -> Result<ImageRate, Strin
         Ok((frame, sys.heartbeat(BoardId::Sensing)))
     };
     let (f0, h0) = count(&mut sys)?;
-    run_ms(&mut sys, 1000.0);
+    run_fed(&mut sys, 1000.0, feed.as_mut());
     let (f1, h1) = count(&mut sys)?;
     let m1 = meter.get();
     let slots = crate::boot::passes_per_beat(BoardId::Sensing) as f64 * h1.wrapping_sub(h0) as f64;

@@ -804,12 +804,12 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
                 edges += 1;
             }
             let want = sensing::locate_um(&mut inv, v, &drift, correct, &area);
-            for (n, w) in drift.o_q13.iter().chain(&drift.g_q24).enumerate() {
-                put(&mut b.ram, drift_at + 4 * n as u32, *w);
-            }
-            for (n, w) in drift.k_q14.iter().enumerate() {
-                let at = drift_at + sensing::drift::layout::K_Q14 as u32 + 4 * n as u32;
-                put(&mut b.ram, at, *w);
+            // The fields the routine reads: the offsets and the correction's factors.
+            use sensing::drift::layout::{K_Q14, O_Q13};
+            for (at, words) in [(O_Q13, drift.o_q13), (K_Q14, drift.k_q14)] {
+                for (n, w) in words.iter().enumerate() {
+                    put(&mut b.ram, drift_at + (at + 4 * n) as u32, *w);
+                }
             }
             for (n, w) in area.iter().enumerate() {
                 put(&mut b.ram, area_at + 4 * n as u32, *w);

@@ -782,7 +782,7 @@ __sense_filter:
 /* BILIN off, r, mul: r = cal's bilinear blend of the cell at a0, word offset off (0: x,
  * 4: y); d2 = fx, d3 = fy (Q10), d7 = 10; d0, d6 scratch. Products and sums as i32; mul is
  * the multiply: muls.l for any table, muls.w (27 cycles, not 45) for one whose steps between
- * neighbouring nodes fit a word (cal::Header::word_steps: then v1 - v0, v3 - v2 and b - a,
+ * neighbouring nodes fit a word (cal::Checker::word_steps_mask: then v1 - v0, v3 - v2 and b - a,
  * which lies between v2 - v0 and v3 - v1, all do). */
 .macro BILIN off, r, mul
     move.l  \off(%a0), %d0          /* v0 */

@@ -179,15 +179,7 @@ impl Checker {
     pub fn step_steps(&mut self, t: &mut impl CalWords) {
         if matches!(self.state, State::Good(_)) && self.steps_at < cal::WORDS {
             let end = (self.steps_at + CHECK_WORDS).min(cal::WORDS);
-            self.wide |= check_steps(t, self.steps_at, end, self.steps_in_row);
-            // At most CHECK_WORDS < a row on: one wrap at most.
-            const _: () = assert!(CHECK_WORDS < 2 * cal::INV_N);
-            let in_row = self.steps_in_row + (end - self.steps_at);
-            self.steps_in_row = if in_row >= 2 * cal::INV_N {
-                in_row - 2 * cal::INV_N
-            } else {
-                in_row
-            };
+            self.wide |= check_steps(t, self.steps_at, end, &mut self.steps_in_row);
             self.steps_at = end;
             // 0 - 1 (all ones) when done with no wide step, else 0 (pending: 1 - 1).
             let any = self.wide | (cal::WORDS - end);
@@ -291,12 +283,14 @@ fn check_words(t: &mut impl CalWords, from: u32, to: u32, mut sum: u32) -> (u32,
 }
 
 /// Checks the steps of inverse-grid words `from..to` (at or after `cal::INV`; `from` is
-/// word `in_row` of its row of (x, y) pairs) from the node before in the row and the node
-/// above. Returns not 0 when one does not fit an i16 (-32768..=[`MAX_WORD_STEP_UM`]).
+/// word `*in_row` of its row of (x, y) pairs, and `to` is on return) from the node before
+/// in the row and the node above. Returns not 0 when one does not fit an i16
+/// (-32768..=[`MAX_WORD_STEP_UM`]).
 #[inline(never)]
-fn check_steps(t: &mut impl CalWords, from: u32, to: u32, mut in_row: u32) -> u32 {
+fn check_steps(t: &mut impl CalWords, from: u32, to: u32, in_row_at: &mut u32) -> u32 {
     const ROW: u32 = 2 * cal::INV_N;
     let mut wide = 0;
+    let mut in_row = *in_row_at;
     let mut i = from;
     while i < to {
         let v = t.word(i) as i32;
@@ -312,6 +306,7 @@ fn check_steps(t: &mut impl CalWords, from: u32, to: u32, mut in_row: u32) -> u3
         }
         i += 1;
     }
+    *in_row_at = in_row;
     wide
 }
 

@@ -152,11 +152,8 @@ pub mod layout {
     use core::mem::offset_of;
     /// `o_q13` (two words).
     pub const O_Q13: usize = 0;
-    /// `g_q24` (two words).
-    pub const G_Q24: usize = 8;
     /// `k_q14` (two words).
     pub const K_Q14: usize = 20;
     const _: () = assert!(offset_of!(Drift, o_q13) == O_Q13);
-    const _: () = assert!(offset_of!(Drift, g_q24) == G_Q24);
     const _: () = assert!(offset_of!(Drift, k_q14) == K_Q14);
 }

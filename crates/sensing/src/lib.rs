@@ -835,7 +835,7 @@ pub fn scripted_slot<G: vme_map::GlobalBus>(
         s.publish(g, b);
     }
     let b = o.beacon.map_or(8, |b| b as usize);
-    let (obj, raw) = (vme_map::OBJECTS.offset(), vme_map::SENSING_RAW.offset());
+    let (obj, raw) = (vme_map::OBJECTS, vme_map::SENSING_RAW);
     let mut word = |off: u32| g.read_u32(off) as i32;
     *out = [
         slot.next as i32,
@@ -850,23 +850,27 @@ pub fn scripted_slot<G: vme_map::GlobalBus>(
         0,
         0,
         0,
-        word(obj + 4),
-        word(raw + 4),
-        word(obj),
-        word(raw),
+        word(obj.word_offset(0)),
+        word(raw.word_offset(0)),
+        word(obj.offset()),
+        word(raw.offset()),
     ];
     if b < BEACONS {
-        // The beacon's words as published (past the sequence and frame words): x, y, t,
-        // flags; raw x, y, sum, level.
-        let (o, r) = (obj + 8 + 16 * b as u32, raw + 8 + 16 * b as u32);
-        out[4] = word(o);
-        out[5] = word(o + 4);
-        out[6] = word(o + 12);
-        out[7] = word(r);
-        out[8] = word(r + 4);
-        out[9] = word(o + 8);
-        out[10] = word(r + 8);
-        out[11] = word(r + 12);
+        // The beacon's words as published (past the frame word): x, y, t, flags; raw x, y,
+        // sum, level.
+        let first = 1 + 4 * b as u32;
+        let (o, r) = (
+            |k| obj.word_offset(first + k),
+            |k| raw.word_offset(first + k),
+        );
+        out[4] = word(o(0));
+        out[5] = word(o(1));
+        out[6] = word(o(3));
+        out[7] = word(r(0));
+        out[8] = word(r(1));
+        out[9] = word(o(2));
+        out[10] = word(r(2));
+        out[11] = word(r(3));
     }
 }
 
