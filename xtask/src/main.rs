@@ -55,7 +55,12 @@ fn images(out: &Path) -> Result<(), String> {
     }
     run(c)?;
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let built = root().join("target").join(TARGET).join("release");
+    // Where cargo put them: CARGO_TARGET_DIR when set (relative to the workspace), else
+    // `target/`.
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(|d| root().join(d))
+        .unwrap_or_else(|| root().join("target"));
+    let built = target_dir.join(TARGET).join("release");
     println!(
         "{:<8} {:>8} {:>8} {:>8} {:>9} {:>7}  files",
         "board", "text", "data", "bss", "total", "of 1MiB"
