@@ -24,11 +24,12 @@ use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 /// Strobe slots per heartbeat: the board beats once per strobe frame of eight beacons.
 pub const SLOTS_PER_BEAT: u32 = 8;
 
-/// The sensing board's state between main-loop passes.
+/// The sensing board's state between main-loop passes. `repr(C)` with the logic's 9 KiB
+/// last: LLVM's M68k backend folds only small displacements into an instruction, and a
+/// field behind the logic cost a register load and an indexed access each time.
+#[repr(C)]
 pub struct Board {
     shell: Shell,
-    /// The logic.
-    pub sensing: Sensing,
     /// The fault seen in the current strobe frame, if any.
     fault: Option<FaultCode>,
     /// Whether a fault was seen in the current frame.
@@ -41,6 +42,8 @@ pub struct Board {
     drift_age: u32,
     /// The servo state record's words as last read.
     servo_words: [u32; SERVO_WORDS],
+    /// The logic.
+    pub sensing: Sensing,
 }
 
 /// Words of the servo state record.
@@ -63,13 +66,13 @@ impl Board {
     pub const fn new() -> Self {
         Self {
             shell: Shell::new(BoardId::Sensing),
-            sensing: Sensing::new(),
             fault: None,
             fault_this_frame: false,
             heartbeat: 0,
             config_seq: None,
             drift_age: 0,
             servo_words: [0; SERVO_WORDS],
+            sensing: Sensing::new(),
         }
     }
 

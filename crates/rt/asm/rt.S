@@ -644,17 +644,24 @@ __fx_mul_shr:
     cmpi.w  #32, %d5
     bls.s   20f                     /* since <= SHORT: the short window */
     /* movement check: |short mean - mean since rest| > MOVE_Q5 (896) on either axis */
-    move.l  (%a1,%d5.l*4), %d6      /* 2^16 / since */
-    moveq   #10, %d7
     move.l  F_SINCE(%a0), %d0
     asr.l   #3, %d0
-    muls.l  %d6, %d0
-    asr.l   %d7, %d0                /* x mean since rest, Q5 */
     move.l  F_Y+F_SINCE(%a0), %d1
     asr.l   #3, %d1
+    cmpi.w  #256, %d5
+    bne.s   8f
+    /* the window full (a resting beacon, the common case): 2^16 / 256 is 2^8, so the
+     * product and its shift are a shift down 2 (|sum >> 3| < 2^18: no product overflowed) */
+    asr.l   #2, %d0                 /* x mean since rest, Q5 */
+    asr.l   #2, %d1                 /* y */
+    bra.s   9f
+8:  move.l  (%a1,%d5.l*4), %d6      /* 2^16 / since */
+    moveq   #10, %d7
+    muls.l  %d6, %d0
+    asr.l   %d7, %d0                /* x mean since rest, Q5 */
     muls.l  %d6, %d1
     asr.l   %d7, %d1                /* y */
-    move.l  F_SHORT(%a0), %d2
+9:  move.l  F_SHORT(%a0), %d2
     asr.l   #2, %d2
     sub.l   %d0, %d2
     bpl.s   5f
@@ -913,18 +920,20 @@ __sense_feedback:
  * for the converter's 12-bit codes and a configuration as Config::from_record or
  * Config::default make it (s_ref 410..2047): the products that fit are 16 x 16 bits.
  * Offsets: crates/sensing/src/lib.rs `layout` (asserted there). */
-    .set    S_OBJ_FRAME, 8384       /* Sensing::objects.frame */
-    .set    S_OBJ_B, 8388           /* Sensing::objects.beacons: 16 bytes each */
-    .set    S_RAW_FRAME, 8516       /* Sensing::raw.frame */
-    .set    S_RAW_B, 8520           /* Sensing::raw.beacons: 16 bytes each */
-    .set    S_DRIFT, 8648           /* Sensing::drift (observations 16 bytes on) */
-    .set    S_OPT, 8676             /* Sensing::config.options (u32) */
-    .set    S_SREF, 8680            /* Sensing::config.s_ref_codes */
-    .set    S_LEVEL, 8684           /* Sensing::config.level_ma */
-    .set    S_PREV_RAW, 8688        /* Sensing::prev_raw (x, y) */
-    .set    S_LEVELS, 8696          /* Sensing::levels: u16 each */
-    .set    S_PREV_NEXT, 8712       /* Sensing::prev_next (u8) */
+    .set    S_OBJ_FRAME, 116        /* Sensing::objects.frame */
+    .set    S_OBJ_B, 120            /* Sensing::objects.beacons: 16 bytes each */
+    .set    S_RAW_FRAME, 248        /* Sensing::raw.frame */
+    .set    S_RAW_B, 252            /* Sensing::raw.beacons: 16 bytes each */
+    .set    S_DRIFT, 88             /* Sensing::drift (observations 16 bytes on) */
+    .set    S_OPT, 0                /* Sensing::config.options (u32) */
+    .set    S_SREF, 4               /* Sensing::config.s_ref_codes */
+    .set    S_LEVEL, 8              /* Sensing::config.level_ma */
+    .set    S_PREV_RAW, 12          /* Sensing::prev_raw (x, y) */
+    .set    S_LEVELS, 20            /* Sensing::levels: u16 each */
+    .set    S_PREV_NEXT, 36         /* Sensing::prev_next (u8) */
+    .set    S_FILTERS, 380          /* Sensing::filters: 1048 bytes a beacon */
     .set    T_XTALK, 1028           /* Tables::crosstalk_q16 */
+    .set    T_FB_RECIP, 1156        /* Tables::feedback_recip */
     .set    FILTER_BYTES, 1048      /* sensing::filter::layout::FILTER_BYTES */
 /* SEQ_ODD seq: d0 = the sequence word at (seq) made odd, (s | 1) + ((s & 1) << 1) as
  * SeqLock::publish_words makes it, and written back; d2 used. */
@@ -971,6 +980,8 @@ __sense_process:
     move.w  4(%a0), %d0
     cmpi.l  #2048+205, %d0          /* sensing::OCCLUDED_BELOW_CODES above 0 V */
     blt.w   90f                     /* occluded: the Rust */
+    cmpi.w  #4095, %d0
+    bhi.w   90f                     /* not a 12-bit code (FEEDBACK_RECIP's range): the Rust */
     movem.l %d2-%d7/%a2-%a5, -(%sp) /* arguments now at 44: s, c, smp, inv, area, e, t */
     move.l  %d0, %d6
     subi.l  #2048, %d6              /* sum, codes above 0 V */
@@ -1026,7 +1037,7 @@ __sense_process:
     /* the filter, in place: FILTER's arguments (f, qx, qy, adaptive, e, recip) pushed */
 1:  move.l  %d7, %d0
     mulu.w  #FILTER_BYTES, %d0
-    lea     (%a5,%d0.l), %a4        /* the beacon's filter */
+    lea     S_FILTERS(%a5,%d0.l), %a4 /* the beacon's filter */
     move.l  %d6, -(%sp)             /* sum, kept */
     move.l  72(%sp), -(%sp)         /* recip: the tables' first (68 + 4) */
     move.l  72(%sp), -(%sp)         /* e (64 + 8) */
@@ -1052,7 +1063,10 @@ __sense_process:
     bra.s   6f
 4:  move.w  (%a0), %d0
     mulu.w  S_SREF+2(%a5), %d0      /* 16 x 16 bits: the level a u16, s_ref in 410..2047 */
-    divs.l  %d6, %d0                /* sum >= 205 here */
+    movea.l 68(%sp), %a1            /* tables */
+    lea     T_FB_RECIP(%a1), %a1
+    mulu.l  (%a1,%d6.l*4), %d1:%d0  /* level s_ref < 2^21, sum in 205..2047: the high */
+    move.l  %d1, %d0                /* word is the quotient (sensing::FEEDBACK_RECIP) */
     CLAMP_LEVEL                     /* as __sense_feedback */
 6:  move.w  %d0, (%a0)
     /* the raw record */

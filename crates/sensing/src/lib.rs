@@ -49,9 +49,21 @@ pub const LEVEL_MIN_MA: i32 = 50;
 pub const LEVEL_MAX_MA: i32 = regs::sensing::LED_LEVEL_MAX_MA as i32;
 /// Slots start on a fixed grid of [`SLOT_TICKS`]: a pass that finds the next grid point less
 /// than this many ticks ahead starts the slot (the timer reads of successive 250 us passes
-/// differ by a tick either way). A late slot leaves the next one shorter, so the frame
-/// rate holds while the average slot fits; a slot later than a whole slot resets the grid.
+/// differ by a tick either way). A late slot leaves the next ones shorter, so the frame
+/// rate holds while the average slot fits; a slot [`CATCH_UP_SLOTS`] late resets the grid.
 pub const SLOT_EARLY_TICKS: u16 = 10;
+/// Slots a pass may run behind its grid and still catch up (the slots after it start as
+/// soon as their beacon has been lit [`MIN_LIT_TICKS`], until one finds its grid point ahead
+/// again): 1 ms. The tip's
+/// drift learning, once every `drift::LEARN_EVERY_FRAMES` frames, takes almost two slots'
+/// time in one slot; with the grid restarted by a slot's lateness, as before, each learning
+/// lost that time for good (the rate at rest was 487 Hz with an average slot inside its
+/// budget). Beyond this, the grid restarts from the pass.
+pub const CATCH_UP_SLOTS: u16 = 4;
+/// The least time a beacon is lit, timer ticks (152 us, where the crosstalk table starts:
+/// the analog filter's residue of the beacon before is 2% and corrected): a slot catching
+/// up waits for it after the one before.
+pub const MIN_LIT_TICKS: u16 = 304;
 /// Tip beacon: the arm counts as resting while both joint angles stay within this of where
 /// they were when the rest began (0.5 mrad: a quarter of a millimetre at the tip). Angles,
 /// not the observer's velocities, which jitter by several mrad/s at rest.
@@ -289,18 +301,12 @@ impl Ix {
     }
 }
 
-/// The sensing board's state. `repr(C)`, the fields the common slot's assembly
-/// (`__sense_process`) uses first, at the offsets [`layout`] asserts (the same on the host
-/// and the 68020: no field there needs padding).
+/// The sensing board's state. `repr(C)`, at the offsets [`layout`] asserts (the same on the
+/// host and the 68020: no field needs padding): the small fields first, the 9 KiB of filter
+/// rings last. LLVM's M68k backend folds only small displacements into an instruction; a
+/// field 8 KiB in cost a register load and an indexed access each time (docs/toolchain.md).
 #[repr(C)]
 pub struct Sensing {
-    filters: [Filter; BEACONS],
-    /// The object table to publish.
-    pub objects: ObjectTable,
-    /// The raw signal table to publish.
-    pub raw: RawTable,
-    /// The drift estimate.
-    pub drift: Drift,
     config: Config,
     /// The raw codes of the last processed sample (for the crosstalk correction).
     prev_raw: [i32; 2],
@@ -310,20 +316,27 @@ pub struct Sensing {
     started: bool,
     last_timer: u16,
     slot_timer: u16,
+    lit: Option<Ix>,
+    servo_stale: bool,
     half_tick: u32,
     now_us: u32,
-    lit: Option<Ix>,
     converting: Option<Conversion>,
     sampled: Option<Conversion>,
-    /// The calibration table check.
-    pub checker: Checker,
     rest: u16,
-    rest_theta: [i32; 2],
-    servo_loops: u32,
     servo_same: u16,
-    servo_stale: bool,
     /// Frames at rest since the drift estimate last learnt (`drift::LEARN_EVERY_FRAMES`).
     learn_age: u32,
+    servo_loops: u32,
+    rest_theta: [i32; 2],
+    /// The drift estimate.
+    pub drift: Drift,
+    /// The object table to publish.
+    pub objects: ObjectTable,
+    /// The raw signal table to publish.
+    pub raw: RawTable,
+    filters: [Filter; BEACONS],
+    /// The calibration table check (last: its enum's padding is not the same on both).
+    pub checker: Checker,
 }
 
 impl Default for Sensing {
@@ -384,6 +397,9 @@ impl Sensing {
     }
 
     /// At timer value `timer`: if a slot is due, what to do now (see [`SLOT_EARLY_TICKS`]).
+    /// Inlined into the board's loop: called, with the test for the beacon's least lit time,
+    /// it cost 216 cycles a slot on the 68020.
+    #[inline(always)]
     pub fn slot(&mut self, timer: u16) -> Option<Slot> {
         let due = self.slot_timer.wrapping_add(SLOT_TICKS);
         let ahead = due.wrapping_sub(timer);
@@ -392,10 +408,12 @@ impl Sensing {
         // condition-code clobber on the 68k; docs/toolchain.md class 1).
         let waiting =
             (ahead.wrapping_sub(SLOT_EARLY_TICKS + 1) < 0x8000 - SLOT_EARLY_TICKS - 1) as u16;
-        if waiting & (self.started as u16) != 0 {
+        // A slot catching up still lights its beacon for MIN_LIT_TICKS.
+        let lit_ticks = timer.wrapping_sub(self.last_timer);
+        let short = (lit_ticks < MIN_LIT_TICKS) as u16;
+        if (waiting | short) & (self.started as u16) != 0 {
             return None;
         }
-        let lit_ticks = timer.wrapping_sub(self.last_timer);
         if self.started {
             let ticks = lit_ticks as u32 + self.half_tick;
             self.now_us = self.now_us.wrapping_add(ticks >> 1);
@@ -576,9 +594,11 @@ impl Sensing {
                 flags |= (e.samples as u32) << bf::SAMPLES_SHIFT;
             }
             (None, h) => {
-                if flags == 0 {
-                    flags |= bf::FILLING | (self.filters[b].count() as u32) << bf::SAMPLES_SHIFT;
-                }
+                // Filling when nothing else was found: a mask, not a branch (its compare's
+                // flags were clobbered on the 68k; docs/toolchain.md class 1).
+                let none = ((flags == 0) as u32).wrapping_neg();
+                flags |=
+                    none & (bf::FILLING | (self.filters[b].count() as u32) << bf::SAMPLES_SHIFT);
                 if h.is_none() {
                     flags |= bf::UNCALIBRATED;
                 }
@@ -700,6 +720,8 @@ struct Tables {
     recip_q16: [i32; filter::LONG + 1],
     /// [`CROSSTALK_Q16`].
     crosstalk_q16: [i32; 32],
+    /// [`FEEDBACK_RECIP`].
+    feedback_recip: [u32; 2048],
 }
 
 /// The one copy of [`Tables`] (a static: the assembly takes its address).
@@ -707,7 +729,26 @@ struct Tables {
 static TABLES: Tables = Tables {
     recip_q16: filter::RECIP_Q16,
     crosstalk_q16: CROSSTALK_Q16,
+    feedback_recip: FEEDBACK_RECIP,
 };
+
+/// Exact reciprocals for the LED feedback's division in the common slot's assembly:
+/// `FEEDBACK_RECIP[d]` = floor(2^32 / d) + 1, so that floor(n m / 2^32) = floor(n / d) for
+/// every n < 2^21 and d < 2^11 (Granlund and Montgomery's bound: m d - 2^32 <= d < 2^11 =
+/// 2^(32 - 21)). [`feedback_ma`]'s dividend is level x s_ref < 2^10 x 2^11 and its divisor a
+/// sum of 12-bit codes above 0 V, below 2^11: one 64-bit `MULU.L` (40 cycles) and a table
+/// read in place of a `DIVS.L` (92), bit-identical to the division.
+pub const FEEDBACK_RECIP: [u32; 2048] = feedback_recips();
+
+const fn feedback_recips() -> [u32; 2048] {
+    let mut t = [0; 2048];
+    let mut d = 1;
+    while d < 2048 {
+        t[d] = ((1u64 << 32) / d as u64 + 1) as u32;
+        d += 1;
+    }
+    t
+}
 
 /// Byte offsets of the fields `__sense_process` (`crates/rt/asm/rt.S`) uses, as its `.set`
 /// lines name them: checked here at compile time, on the host and the 68020 alike.
@@ -715,9 +756,9 @@ pub mod layout {
     use super::{AdcSample, Config, Conversion, Sensing, Tables};
     use core::mem::{offset_of, size_of};
     use vme_map::records::{Beacon, ObjectTable, RawBeacon, RawTable};
-    const _: () = assert!(offset_of!(Sensing, filters) == 0);
+    const _: () = assert!(offset_of!(Sensing, filters) == 380);
     const _: () = assert!(size_of::<super::Filter>() == super::filter::layout::FILTER_BYTES);
-    const _: () = assert!(offset_of!(Sensing, objects) == 8384);
+    const _: () = assert!(offset_of!(Sensing, objects) == 116);
     const _: () = assert!(offset_of!(ObjectTable, frame) == 0);
     const _: () = assert!(offset_of!(ObjectTable, beacons) == 4);
     const _: () = assert!(size_of::<Beacon>() == 16);
@@ -725,7 +766,7 @@ pub mod layout {
     const _: () = assert!(offset_of!(Beacon, y_um) == 4);
     const _: () = assert!(offset_of!(Beacon, t_us) == 8);
     const _: () = assert!(offset_of!(Beacon, flags) == 12);
-    const _: () = assert!(offset_of!(Sensing, raw) == 8516);
+    const _: () = assert!(offset_of!(Sensing, raw) == 248);
     const _: () = assert!(offset_of!(RawTable, frame) == 0);
     const _: () = assert!(offset_of!(RawTable, beacons) == 4);
     const _: () = assert!(size_of::<RawBeacon>() == 16);
@@ -733,15 +774,15 @@ pub mod layout {
     const _: () = assert!(offset_of!(RawBeacon, y_q5) == 4);
     const _: () = assert!(offset_of!(RawBeacon, sum_codes) == 8);
     const _: () = assert!(offset_of!(RawBeacon, level_ma) == 12);
-    const _: () = assert!(offset_of!(Sensing, drift) == 8648);
+    const _: () = assert!(offset_of!(Sensing, drift) == 88);
     const _: () = assert!(offset_of!(super::Drift, observations) == 16);
-    const _: () = assert!(offset_of!(Sensing, config) == 8676);
+    const _: () = assert!(offset_of!(Sensing, config) == 0);
     const _: () = assert!(offset_of!(Config, options) == 0);
     const _: () = assert!(offset_of!(Config, s_ref_codes) == 4);
     const _: () = assert!(offset_of!(Config, level_ma) == 8);
-    const _: () = assert!(offset_of!(Sensing, prev_raw) == 8688);
-    const _: () = assert!(offset_of!(Sensing, levels) == 8696);
-    const _: () = assert!(offset_of!(Sensing, prev_next) == 8712);
+    const _: () = assert!(offset_of!(Sensing, prev_raw) == 12);
+    const _: () = assert!(offset_of!(Sensing, levels) == 20);
+    const _: () = assert!(offset_of!(Sensing, prev_next) == 36);
     const _: () = assert!(offset_of!(Conversion, t_us) == 0);
     const _: () = assert!(offset_of!(Conversion, lit_ticks) == 4);
     const _: () = assert!(offset_of!(Conversion, beacon) == 6);
@@ -752,6 +793,7 @@ pub mod layout {
     const _: () = assert!(offset_of!(AdcSample, over) == 6);
     const _: () = assert!(offset_of!(Tables, recip_q16) == 0);
     const _: () = assert!(offset_of!(Tables, crosstalk_q16) == 1028);
+    const _: () = assert!(offset_of!(Tables, feedback_recip) == 1156);
     // The published tables: a sequence word, the frame word, then four words a beacon in
     // the order of the records in `Sensing` (copied as they lie).
     use vme_map::record::Record;
@@ -777,13 +819,14 @@ pub mod layout {
     const _: () = assert!(super::DEFAULT_S_REF_CODES >= 410 && super::DEFAULT_S_REF_CODES < 2048);
 }
 
-/// Where this slot sits on the grid: `due` if it is less than a whole slot late (and the
-/// grid has started), else `timer` (the grid restarts). By masks: the select this was
+/// Where this slot sits on the grid: `due` if it is less than [`CATCH_UP_SLOTS`] late (and
+/// the grid has started), else `timer` (the grid restarts). By masks: the select this was
 /// compiled to clobbered its compare's flags on the 68k (docs/toolchain.md class 1).
 #[inline(always)]
 fn next_grid(due: u16, timer: u16, started: bool) -> u16 {
     let late = timer.wrapping_sub(due) as i32;
-    let on = ((late - SLOT_TICKS as i32) >> 31) & (started as i32).wrapping_neg();
+    let on =
+        ((late - (CATCH_UP_SLOTS * SLOT_TICKS) as i32) >> 31) & (started as i32).wrapping_neg();
     ((due as i32 & on) | (timer as i32 & !on)) as u16
 }
 
@@ -960,7 +1003,8 @@ fn crosstalk_q2(q2: &mut [i32; 2], raw: &[i32; 2], prev: &[i32; 2], lit_ticks: u
 /// read as occluded and was reset again: found by the reflex campaign, the beacon was never
 /// valid.) level < 2^10 and s_ref < 2^11: the product fits in 32 bits. (A reciprocal table
 /// in place of the division, within 1 mA of it, saved 90 cycles a slot but moved the fig.
-/// VI.2 scene, whose loop is that sensitive, off its loop.) Not inlined: inlined, it moved a
+/// VI.2 scene, whose loop is that sensitive, off its loop; the common slot's assembly uses
+/// [`FEEDBACK_RECIP`], which is exact.) Not inlined: inlined, it moved a
 /// condition-code clobber into `Sensing::step` (docs/toolchain.md class 1). On the 68020
 /// one call of `__sense_feedback` (the runtime's assembly: a `MULS.L` and a `DIVS.L`,
 /// bit-identical: `tests/tests/firmware_functions.rs`), where the compiled form called

@@ -497,9 +497,50 @@ fn the_timer_paces_slots_and_counts_microseconds_across_its_wrap() {
     assert!(s.slot(500).is_some());
     assert!(s.slot(1200).is_some(), "200 ticks late");
     assert!(s.slot(1480).is_none(), "the grid point is 1500");
-    assert!(s.slot(1495).is_some());
-    // More than a slot late: the grid restarts.
-    assert!(s.slot(3000).is_some());
-    assert!(s.slot(3400).is_none());
-    assert!(s.slot(3500).is_some());
+    assert!(s.slot(1495).is_none(), "lit for less than MIN_LIT_TICKS");
+    assert!(s.slot(1504).is_some());
+    // Almost three slots late (a long slot): the slots after it start as soon as their
+    // beacon has been lit MIN_LIT_TICKS, until the grid point is ahead again.
+    assert!(s.slot(3400).is_some(), "due at 2000");
+    assert!(s.slot(3400 + MIN_LIT_TICKS - 1).is_none(), "lit for less");
+    let (mut t, mut due, mut caught_up) = (3400u16, 2000u16, 0);
+    while due + SLOT_TICKS <= t + MIN_LIT_TICKS + SLOT_EARLY_TICKS {
+        t += MIN_LIT_TICKS;
+        due += SLOT_TICKS;
+        assert!(s.slot(t).is_some(), "catching up at {t}, due at {due}");
+        caught_up += 1;
+    }
+    assert_eq!(caught_up, 7, "1,400 ticks late, 196 made up a slot");
+    assert!(
+        s.slot(t + MIN_LIT_TICKS).is_none(),
+        "the grid point is ahead again"
+    );
+    assert!(s.slot(due + SLOT_TICKS).is_some());
+    // CATCH_UP_SLOTS late or more: the grid restarts from the pass.
+    let t = due + SLOT_TICKS + CATCH_UP_SLOTS * SLOT_TICKS + SLOT_TICKS;
+    assert!(s.slot(t).is_some());
+    assert!(s.slot(t + 400).is_none());
+    assert!(s.slot(t + 500).is_some());
+}
+
+/// The common slot's assembly divides by `FEEDBACK_RECIP`: the high word of n m must be
+/// n / d for every dividend the feedback forms (level x s_ref < 2^21) and every sum it
+/// divides by. Checked where a floor can first go wrong, at each multiple of d and one
+/// below it, up to the largest dividend, and at the largest dividend itself.
+#[test]
+fn the_feedback_reciprocals_divide_exactly() {
+    let n_max = (crate::LEVEL_MAX_MA * 2047) as u64;
+    assert!(n_max < 1 << 21);
+    for d in crate::OCCLUDED_BELOW_CODES as u64..2048 {
+        let m = crate::FEEDBACK_RECIP[d as usize] as u64;
+        let q = |n: u64| (n * m) >> 32;
+        assert_eq!(q(n_max), n_max / d, "n {n_max} d {d}");
+        let mut k = 1;
+        while k * d <= n_max + d {
+            for n in [k * d - 1, k * d] {
+                assert_eq!(q(n), n / d, "n {n} d {d}");
+            }
+            k += 1;
+        }
+    }
 }
