@@ -18,16 +18,18 @@ use vme_map::record::Record;
 use vme_map::records::{ReflexSubgoal, ServoState};
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
-/// The servo board's state between main-loop passes.
+/// The servo board's state between main-loop passes. `repr(C)`, the servo's state last
+/// (docs/toolchain.md, "Field order is a cost").
+#[repr(C)]
 pub struct Board {
     shell: Shell,
-    servo: Servo,
     ticks: u64,
     loops: u32,
     /// The subgoal last read whole.
     last_sub: Option<Subgoal>,
     /// Passes in a row the subgoal record read torn.
     torn: u8,
+    servo: Servo,
 }
 
 /// Passes in a row the subgoal record may read torn (the reflex caught mid-publish) before

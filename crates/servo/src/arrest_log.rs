@@ -18,12 +18,13 @@ pub const PASSES: usize = 128;
 /// A ring of (time, arrest point) of the last [`PASSES`] passes. Times are in any unit, a
 /// wrapping `u32` clock; ages within the ring must stay below 2^31 of it.
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct ArrestLog {
-    t: [u32; PASSES],
-    arrest: [[i32; 2]; PASSES],
     n: u32,
     /// Entries kept, up to [`PASSES`].
     kept: u32,
+    t: [u32; PASSES],
+    arrest: [[i32; 2]; PASSES],
 }
 
 impl Default for ArrestLog {

@@ -710,8 +710,11 @@ pub struct Output {
     pub regime: [Regime; 2],
 }
 
-/// The servo of both links.
+/// The servo of both links. `repr(C)` with the arrest log last: LLVM's M68k backend reached
+/// fields behind the log's 1.5 KiB by loading the offset into a register and indexing with
+/// it (docs/toolchain.md, "Field order is a cost").
 #[derive(Clone, Debug)]
+#[repr(C)]
 pub struct Servo {
     started: bool,
     last_enc: [u16; 2],
