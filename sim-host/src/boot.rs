@@ -236,7 +236,8 @@ pub struct Profile {
     /// name), most cycles first: for reading beside `m68k-linux-gnu-objdump -d` of the image.
     pub addresses: Vec<(u32, u64, u64, String)>,
     /// The sensing board's (busy cycles, strobe slots) in the profiled time
-    /// (`sensing_bench::SlotMeter`): its work without the wait for the timer.
+    /// (`sensing_bench::SlotMeter`), or the servo's (busy cycles, passes)
+    /// (`servo_bench::PassMeter`): their work without the wait for the timer.
     pub busy: Option<(u64, u64)>,
 }
 
@@ -263,6 +264,16 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
         // rest and a full filter window.
         let ms = if resting { 1200.0 } else { 600.0 };
         crate::sensing_bench::run_fed(&mut sys, ms, resting.then_some(&mut servo_feed));
+    }
+    if board == BoardId::Servo {
+        // The servo's busy cycles a pass, beside its paced loop rate.
+        let io = std::mem::replace(
+            &mut sys.boards[0].io,
+            Box::new(crate::devices::IdOnly::new(board)),
+        );
+        let m = crate::servo_bench::PassMeter::new(io);
+        meter = Some(m.stats.clone());
+        sys.boards[0].io = Box::new(m);
     }
     // The reflex needs a servo, positions and a map that stay fresh: the host feeds them
     // every 0.25 ms (the free-space case at rest of `sim-host bench reflex`).

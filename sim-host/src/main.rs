@@ -485,10 +485,15 @@ fn main() -> ExitCode {
                             CPU_HZ / 4000
                         );
                     }
-                    if let Some((busy, slots)) = p.busy {
+                    if let Some((busy, n)) = p.busy {
+                        let (unit, units) = if per_beat > 1 {
+                            ("slot", "slots")
+                        } else {
+                            ("pass", "passes")
+                        };
                         println!(
-                            "(busy {:.0} cycles a slot over {slots} slots; the rest of a slot waits for the timer)",
-                            busy as f64 / slots.max(1) as f64
+                            "(busy {:.0} cycles a {unit} over {n} {units}; the rest of a {unit} waits for the timer)",
+                            busy as f64 / n.max(1) as f64
                         );
                     }
                     println!("{:>10} {:>6} {:>12}  function", "cycles", "%", "per loop");
