@@ -45,6 +45,20 @@ impl<T: Device + ?Sized> Device for Box<T> {
     }
 }
 
+/// For the meters' tests: a device that decodes every register and reads 0.
+#[cfg(test)]
+pub struct NullDevice;
+
+#[cfg(test)]
+impl Device for NullDevice {
+    fn read16(&mut self, _off: u32, _now: u64) -> Option<u16> {
+        Some(0)
+    }
+    fn write16(&mut self, _off: u32, _val: u16, _now: u64) -> bool {
+        true
+    }
+}
+
 /// The bus one emulated board sees while it runs.
 pub struct BoardBus<'a> {
     /// Local RAM (1 MiB).

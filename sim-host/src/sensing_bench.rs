@@ -683,19 +683,8 @@ pub fn lit_camera(seed: u64) -> Box<dyn crate::emu::Device> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emu::Device;
+    use crate::emu::{Device, NullDevice};
     use regs::sensing::{ADC_X, LED_SELECT, TIMER};
-
-    /// A device that decodes every register and reads 0.
-    struct Null;
-    impl Device for Null {
-        fn read16(&mut self, _off: u32, _now: u64) -> Option<u16> {
-            Some(0)
-        }
-        fn write16(&mut self, _off: u32, _val: u16, _now: u64) -> bool {
-            true
-        }
-    }
 
     /// The resting arm of the image-rate measurement holds the tip's beacon where the lit
     /// camera shows it (so the board's drift reference learns from it).
@@ -711,7 +700,7 @@ mod tests {
     /// only read the timer (waiting for the grid point) count nothing.
     #[test]
     fn the_slot_meter_counts_only_the_passes_that_strobe() {
-        let mut m = SlotMeter::new(Null);
+        let mut m = SlotMeter::new(NullDevice);
         let stats = m.stats.clone();
         // A slot's pass at 100: reads, strobes, works until 4100.
         m.read16(TIMER, 100);

@@ -759,25 +759,14 @@ impl<D: crate::emu::Device> crate::emu::Device for PassMeter<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emu::Device;
-
-    /// A device that decodes every register and reads 0.
-    struct Null;
-    impl Device for Null {
-        fn read16(&mut self, _off: u32, _now: u64) -> Option<u16> {
-            Some(0)
-        }
-        fn write16(&mut self, _off: u32, _val: u16, _now: u64) -> bool {
-            true
-        }
-    }
+    use crate::emu::{Device, NullDevice};
 
     /// Two passes between waits: each counts from the timer read before its encoder reads
     /// to the next wait's first timer read; the wait's own reads count nothing.
     #[test]
     fn the_pass_meter_counts_from_the_wait_to_the_next_wait() {
         use regs::servo::{DAC0, DAC1, ENC0, ENC1, TIMER};
-        let mut m = PassMeter::new(Null);
+        let mut m = PassMeter::new(NullDevice);
         // A wait, then a pass: encoders at 100, timer for dt at 120, DACs at 900.
         for t in [0, 40, 80] {
             m.read16(TIMER, t);
