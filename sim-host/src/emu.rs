@@ -45,6 +45,32 @@ impl<T: Device + ?Sized> Device for Box<T> {
     }
 }
 
+/// What a meter of an image's busy time counted (`sensing_bench::SlotMeter` a strobe slot a
+/// pass, `servo_bench::PassMeter` a control pass): shared between the meter, which the
+/// board's I/O owns, and the caller.
+#[derive(Debug, Default)]
+pub struct BusyStats {
+    /// Cycles of the passes' work, without the waits for the timer.
+    pub busy_cycles: std::sync::atomic::AtomicU64,
+    /// Passes counted.
+    pub passes: std::sync::atomic::AtomicU64,
+}
+
+impl BusyStats {
+    /// Counts one pass of `cycles` busy cycles.
+    pub fn add(&self, cycles: u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.busy_cycles.fetch_add(cycles, Relaxed);
+        self.passes.fetch_add(1, Relaxed);
+    }
+
+    /// (busy cycles, passes) so far.
+    pub fn get(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        (self.busy_cycles.load(Relaxed), self.passes.load(Relaxed))
+    }
+}
+
 /// For the meters' tests: a device that decodes every register and reads 0.
 #[cfg(test)]
 pub struct NullDevice;

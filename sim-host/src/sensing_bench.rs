@@ -610,26 +610,9 @@ pub const LIT_BEACONS: [[f64; 2]; 8] = [
 pub struct SlotMeter<D> {
     inner: D,
     /// Busy cycles and slots counted so far (shared with the caller).
-    pub stats: std::sync::Arc<SlotStats>,
+    pub stats: std::sync::Arc<crate::emu::BusyStats>,
     last_timer_read: Option<u64>,
     lit: bool,
-}
-
-/// What a [`SlotMeter`] counted.
-#[derive(Debug, Default)]
-pub struct SlotStats {
-    /// Cycles from the timer read of a pass that lit a beacon to the next timer read.
-    pub busy_cycles: std::sync::atomic::AtomicU64,
-    /// Passes that lit a beacon.
-    pub slots: std::sync::atomic::AtomicU64,
-}
-
-impl SlotStats {
-    /// (busy cycles, slots) so far.
-    pub fn get(&self) -> (u64, u64) {
-        use std::sync::atomic::Ordering::Relaxed;
-        (self.busy_cycles.load(Relaxed), self.slots.load(Relaxed))
-    }
 }
 
 impl<D: crate::emu::Device> SlotMeter<D> {
@@ -646,11 +629,9 @@ impl<D: crate::emu::Device> SlotMeter<D> {
 
 impl<D: crate::emu::Device> crate::emu::Device for SlotMeter<D> {
     fn read16(&mut self, off: u32, now: u64) -> Option<u16> {
-        use std::sync::atomic::Ordering::Relaxed;
         if off == regs::sensing::TIMER {
             if let (Some(t), true) = (self.last_timer_read, self.lit) {
-                self.stats.busy_cycles.fetch_add(now - t, Relaxed);
-                self.stats.slots.fetch_add(1, Relaxed);
+                self.stats.add(now - t);
             }
             self.last_timer_read = Some(now);
             self.lit = false;
@@ -664,7 +645,12 @@ impl<D: crate::emu::Device> crate::emu::Device for SlotMeter<D> {
 }
 
 /// [`lit_camera`] behind a [`SlotMeter`]: the device and its counts.
-pub fn metered_lit_camera(seed: u64) -> (Box<dyn crate::emu::Device>, std::sync::Arc<SlotStats>) {
+pub fn metered_lit_camera(
+    seed: u64,
+) -> (
+    Box<dyn crate::emu::Device>,
+    std::sync::Arc<crate::emu::BusyStats>,
+) {
     let m = SlotMeter::new(lit_camera(seed));
     let stats = m.stats.clone();
     (Box::new(m), stats)

@@ -713,7 +713,7 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
 pub struct PassMeter<D> {
     inner: D,
     /// Busy cycles and passes counted so far (shared with the caller).
-    pub stats: std::sync::Arc<crate::sensing_bench::SlotStats>,
+    pub stats: std::sync::Arc<crate::emu::BusyStats>,
     last_timer_read: Option<u64>,
     started: Option<u64>,
     wrote_dac: bool,
@@ -735,11 +735,9 @@ impl<D: crate::emu::Device> PassMeter<D> {
 impl<D: crate::emu::Device> crate::emu::Device for PassMeter<D> {
     fn read16(&mut self, off: u32, now: u64) -> Option<u16> {
         use regs::servo::{ENC0, ENC1, TIMER};
-        use std::sync::atomic::Ordering::Relaxed;
         if off == TIMER {
             if let (Some(t), true) = (self.started, self.wrote_dac) {
-                self.stats.busy_cycles.fetch_add(now - t, Relaxed);
-                self.stats.slots.fetch_add(1, Relaxed);
+                self.stats.add(now - t);
                 self.started = None;
                 self.wrote_dac = false;
             }

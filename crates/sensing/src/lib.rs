@@ -54,11 +54,10 @@ pub const LEVEL_MAX_MA: i32 = regs::sensing::LED_LEVEL_MAX_MA as i32;
 pub const SLOT_EARLY_TICKS: u16 = 10;
 /// Slots a pass may run behind its grid and still catch up (the slots after it start as
 /// soon as their beacon has been lit [`MIN_LIT_TICKS`], until one finds its grid point ahead
-/// again): 1 ms. The tip's
-/// drift learning, once every `drift::LEARN_EVERY_FRAMES` frames, takes almost two slots'
-/// time in one slot; with the grid restarted by a slot's lateness, as before, each learning
-/// lost that time for good (the rate at rest was 487 Hz with an average slot inside its
-/// budget). Beyond this, the grid restarts from the pass.
+/// again): 1 ms. The tip's drift learning, once every `drift::LEARN_EVERY_FRAMES` frames,
+/// takes almost two slots' time in one slot; with the grid restarted by a slot's lateness,
+/// as before, each learning lost that time for good (the rate at rest was 487 Hz with an
+/// average slot inside its budget). Beyond this, the grid restarts from the pass.
 pub const CATCH_UP_SLOTS: u16 = 4;
 /// The least time a beacon is lit, timer ticks (152 us, where the crosstalk table starts:
 /// the analog filter's residue of the beacon before is 2% and corrected): a slot catching
