@@ -40,6 +40,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod escape;
 pub mod fill;
 pub mod grid;
 pub mod sight;
@@ -47,6 +48,7 @@ pub mod sight;
 mod tests;
 pub mod wall;
 
+use escape::Escape;
 use fill::Fill;
 use grid::Grid;
 use reflex::goal::{self, TURN_URAD};
@@ -199,9 +201,16 @@ pub struct Planner {
     scout_right: Tracer,
     scout_result: [i32; 2],
     scouting: bool,
+    /// The search for a free cell to start wall following from, when the arm stalled in
+    /// blocked cells ([`escape`]), and whether it is running (the arm held meanwhile).
+    escape: Escape,
+    escaping: bool,
+    /// Searches for a way out of blocked cells started so far.
+    escapes: u32,
     /// The wall's direction from the hit point.
     wall_dir: u32,
-    /// Where the arm was held when the goal became unreachable.
+    /// Where the arm is held: where it was when the goal became unreachable, or while the
+    /// way out of a pocket of blocked cells is searched.
     hold_urad: [i32; 2],
     unreachable_fills: u32,
     last_request: [i32; 2],
@@ -287,6 +296,9 @@ impl Planner {
             scout_right: Tracer::IDLE,
             scout_result: [0; 2],
             scouting: false,
+            escape: Escape::new(),
+            escaping: false,
+            escapes: 0,
             wall_dir: 0,
             hold_urad: [0; 2],
             unreachable_fills: 0,
@@ -300,6 +312,12 @@ impl Planner {
             walk: [0; 2],
             found: [0; 2],
         }
+    }
+
+    /// How many times the arm stalled in blocked cells and the planner searched for the
+    /// way out ([`escape`]): for benches and tests.
+    pub fn escapes(&self) -> u32 {
+        self.escapes
     }
 
     /// The goal in use: the chosen pose at the approach's image (absolute micro-radians).
@@ -321,6 +339,7 @@ impl Planner {
 
     fn set_mode(&mut self, m: Mode) {
         self.mode = m;
+        self.escaping = false;
         self.mode_since_us = self.now_us;
         self.best_d2 = i32::MAX;
         self.best_since_us = self.now_us;
@@ -406,6 +425,7 @@ impl Planner {
 
         let (req, m, why) = match self.mode {
             Mode::Idle | Mode::Free => (goal_urad, mode::FREE, reason::NONE),
+            Mode::Wall if self.escaping => (self.hold_urad, mode::WALL, reason::NONE),
             Mode::Wall => (centre_urad(self.tracer.bug), mode::WALL, reason::NONE),
             Mode::Unreachable(r) => (self.hold_urad, mode::UNREACHABLE, r),
         };
@@ -479,10 +499,14 @@ impl Planner {
         // one cell over, where the wand's noise put the goal cell, counted as stalled after
         // PROGRESS_US and set off round the other approaches, elbow flip and all.)
         // Nor at either of the goal's poses on any image of the torus (an arm at the goal
-        // never sets off round an approach).
+        // never sets off round an approach), unless the map marks that pose's pixel: an arm
+        // stopped against an obstacle next to the goal's marked other pose, while going for
+        // the free one, never stalled and waited there for ever (a case
+        // `reaches_every_reachable_goal` found).
         let at = |c: [i32; 2]| {
             let w = |i: usize| masks::abs(((arm[i] - c[i] + 64) & 127) - 64);
-            masks::lt(1, w(0)) | masks::lt(1, w(1))
+            let inside = (self.grid.marked(c) as i32).wrapping_neg();
+            masks::lt(1, w(0)) | masks::lt(1, w(1)) | inside
         };
         let away = masks::lt(2, d) & at(self.pose_cells[0]) & at(self.pose_cells[1]);
         (settled & (stalled | no_progress | held_long) & away & 1) as u32
@@ -502,7 +526,7 @@ impl Planner {
         self.poses = poses;
         self.pose_cells = [cell_of(poses[0]), cell_of(poses[1])];
         self.has_goal = true;
-        self.base_pose = self.pick_pose(&poses, theta);
+        self.base_pose = self.pick_pose(theta);
         self.pose = self.base_pose;
         let jump = !had || cheb(old, cell_of(self.target())) > 1;
         if jump && self.mode != Mode::Idle {
@@ -512,14 +536,27 @@ impl Planner {
     }
 
     /// The pose to go for: one the last settled fill reached, else the nearest.
-    fn pick_pose(&self, poses: &[[i32; 2]; 2], theta: [i32; 2]) -> usize {
-        let first = (goal::second_nearer(*poses, theta) & 1) as usize;
-        let other = 1 - first;
-        if self.score(poses[other]) > self.score(poses[first]) {
-            other
-        } else {
-            first
-        }
+    fn pick_pose(&self, theta: [i32; 2]) -> usize {
+        let first = (goal::second_nearer(self.poses, theta) & 1) as usize;
+        self.better_pose(first)
+    }
+
+    /// Of the goal's poses, `first` unless the other scores better ([`Planner::score`]).
+    /// The poses are indexed in `self`: a local copy indexed by the other pose's number
+    /// lost its index on the 68k (docs/toolchain.md, class 6), so the image compared pose 0
+    /// with itself and never switched poses where the native board did (found by the
+    /// planner bench's "stalled within the clearance" case).
+    #[inline(never)]
+    fn better_pose(&self, first: usize) -> usize {
+        // Indices masked (no bounds checks) and a sign mask, not a compare and branch: the
+        // branch drew a condition-code clobber (docs/toolchain.md, class 1).
+        let first = first & 1;
+        let other = first ^ 1;
+        let better = masks::lt(
+            self.score(self.poses[first]) as i32,
+            self.score(self.poses[other]) as i32,
+        );
+        masks::pick(better, other as i32, first as i32) as usize
     }
 
     /// How good a pose is to go for: reached through the marked pixels by the last fill (or
@@ -596,19 +633,13 @@ impl Planner {
         if !self.has_goal {
             return;
         }
-        let poses = self.poses;
         let cells = self.pose_cells;
         let r0 = self.fill.reached(cells[0]);
         let r1 = self.fill.reached(cells[1]);
         if r0 == 1 || r1 == 1 {
             self.unreachable_fills = 0;
             // Go for a pose the fill reached, clear of blocked cells if one is.
-            let other = 1 - self.base_pose;
-            let want = if self.score(poses[other]) > self.score(poses[self.base_pose]) {
-                other
-            } else {
-                self.base_pose
-            };
+            let want = self.better_pose(self.base_pose);
             if want != self.base_pose {
                 self.base_pose = want;
                 if self.mode != Mode::Idle {
@@ -648,14 +679,25 @@ impl Planner {
         }
     }
 
-    /// The reflex stalled at `arm` short of `goal`: a hit point, wall following.
+    /// The reflex stalled at `arm` short of `goal`: a hit point, wall following. An arm
+    /// stalled in blocked cells is held while the way out is searched ([`escape`]); wall
+    /// following starts from the free cell found.
     fn hit_wall(&mut self, arm: [i32; 2], goal: [i32; 2], theta: [i32; 2]) {
-        // The bug starts on the nearest free cell (the arm may stand nearer the wall).
-        let Some(start) = self.nearest_free(arm, goal) else {
-            // Deep in blocked cells: nothing to follow from here.
-            self.next_approach(theta);
+        if self.grid.blocked(arm) != 0 {
+            self.escape.start(arm, goal);
+            self.escapes = self.escapes.wrapping_add(1);
+            self.hold_urad = theta;
+            self.sight.stop();
+            self.set_mode(Mode::Wall);
+            self.escaping = true;
             return;
-        };
+        }
+        self.wall_from(arm, goal, theta);
+    }
+
+    /// Wall following from free cell `start` toward `goal`: the wall is looked for toward
+    /// the goal, and the scouts run both ways round it.
+    fn wall_from(&mut self, start: [i32; 2], goal: [i32; 2], theta: [i32; 2]) {
         let d = d2(start, goal);
         if d >= self.last_hit_d2 && self.cfg.leave == Leave::Trajectory {
             // No nearer than the last hit point: the M-path did not converge.
@@ -666,29 +708,15 @@ impl Planner {
             self.strict_sight = true;
         }
         // The wall: the blocked neighbour toward the goal, probing a few cells ahead.
-        let mut c = start;
-        let mut n = 0;
-        let mut wall_dir = None;
-        while n < HIT_SEARCH_PX {
-            let dir = dir_toward(c, goal);
-            if self.grid.blocked(add(c, step_of(dir))) != 0 {
-                wall_dir = Some(dir);
-                break;
-            }
-            let o = dir_toward_other(c, goal, dir);
-            if o != 4 && self.grid.blocked(add(c, step_of(o))) != 0 {
-                wall_dir = Some(o);
-                break;
-            }
-            c = add(c, step_of(dir));
-            n += 1;
-        }
-        let Some(w) = wall_dir else {
+        self.walk = start;
+        let w = find_wall(&self.grid, &mut self.walk, goal);
+        let c = self.walk;
+        if w >= 4 {
             // Stalled with no wall in sight (the goal within the planner's clearance of an
             // obstacle, where the reflex stops short): the next approach.
             self.next_approach(theta);
             return;
-        };
+        }
         self.hit = c;
         self.hit_d2 = d2(c, goal);
         self.last_hit_d2 = self.hit_d2;
@@ -753,43 +781,20 @@ impl Planner {
         self.tracer = Tracer::new(self.hit, self.wall_dir, side, self.hit, goal);
     }
 
-    /// The free cell nearest `arm` within [`fill::SEED_PX`] cells (nearest the goal among
-    /// equals).
-    fn nearest_free(&self, arm: [i32; 2], goal: [i32; 2]) -> Option<[i32; 2]> {
-        if self.grid.blocked(arm) == 0 {
-            return Some(arm);
-        }
-        let mut best: Option<[i32; 2]> = None;
-        let mut r = 1;
-        while r <= fill::SEED_PX {
-            let mut d2_ = -r;
-            while d2_ <= r {
-                let mut d1 = -r;
-                while d1 <= r {
-                    let c = [arm[0] + d1, arm[1] + d2_];
-                    if cheb(c, arm) == r && self.grid.blocked(c) == 0 {
-                        let better = match best {
-                            None => true,
-                            Some(b) => d2(c, goal) < d2(b, goal),
-                        };
-                        if better {
-                            best = Some(c);
-                        }
-                    }
-                    d1 += 1;
-                }
-                d2_ += 1;
-            }
-            if best.is_some() {
-                return best;
-            }
-            r += 1;
-        }
-        None
-    }
-
     /// One wall-following cycle.
     fn follow(&mut self, arm: [i32; 2], goal: [i32; 2], sv: ServoView) {
+        if self.escaping {
+            match self.escape.work(&self.grid) {
+                escape::status::RUNNING => {}
+                escape::status::FOUND => {
+                    let start = self.escape.found();
+                    self.wall_from(start, goal, sv.theta_urad);
+                }
+                // No free cell the arm can reach nearby: the next approach.
+                _ => self.next_approach(sv.theta_urad),
+            }
+            return;
+        }
         if self.scouting {
             // The arm waits at the hit point while the scouts run (the trajectory check
             // waits too: both in one cycle were over 50,000 cycles on the 68020).
@@ -938,6 +943,31 @@ fn verdict(e: Event, steps: u32) -> i32 {
         steps as i32 + 1,
         masks::pick(failure.wrapping_neg(), FAIL, 0),
     )
+}
+
+/// The wall toward `goal` from free cell `c`, probing up to [`HIT_SEARCH_PX`] cells ahead:
+/// the direction of the blocked neighbour (0-3), `c` moved to the cell next to it; 4 when
+/// there is none. The cell lives behind a reference, not in a register the loop carries
+/// (docs/toolchain.md, class 1: in the planner's step the loop drew a condition-code
+/// clobber).
+#[inline(never)]
+fn find_wall(g: &Grid, c: &mut [i32; 2], goal: [i32; 2]) -> u32 {
+    let mut n = 0;
+    while n < HIT_SEARCH_PX {
+        let dir = dir_toward(*c, goal);
+        if g.blocked(add(*c, step_of(dir))) != 0 {
+            return dir;
+        }
+        let o = dir_toward_other(*c, goal, dir);
+        // `o` is 4 when there is no way along the other axis: masked, not compared.
+        let along = ((o >> 2) ^ 1) & g.blocked(add(*c, step_of(o)));
+        if along != 0 {
+            return o;
+        }
+        *c = add(*c, step_of(dir));
+        n += 1;
+    }
+    4
 }
 
 /// The direction from `c` toward `g` along the axis with more to go (sign masks).

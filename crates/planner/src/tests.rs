@@ -467,3 +467,116 @@ fn a_fault_hold_stops_the_progress_clock() {
         "stalled after {ms} ms, not {want}"
     );
 }
+
+/// The map of boxes `(x, y, w, h)` (cells, corners inclusive).
+fn boxes(b: &[(i32, i32, i32, i32)]) -> World {
+    let mut w = World::new();
+    for (x, y, dx, dy) in b {
+        w.rect([*x, *y], [x + dx, y + dy]);
+    }
+    w
+}
+
+#[test]
+fn an_arm_stalled_down_a_pocket_of_blocked_cells_finds_the_way_out() {
+    // The arm slides along a bar into a 26-cell gap of blocked (unmarked) cells between two
+    // boxes and stalls at its bottom, 23 cells from its mouth (found by
+    // `reaches_every_reachable_goal`: the ring search found no free cell and the
+    // approaches cycled for ever).
+    let w = boxes(&[
+        (83, 94, 39, 12),
+        (3, 101, 12, 6),
+        (70, 91, 27, 17),
+        (91, 109, 37, 2),
+    ]);
+    let r = run(&w, [86, 80], [101, 3], 120_000);
+    assert!(r.arrived, "{r:?}");
+    assert!(!r.collided);
+}
+
+#[test]
+fn an_arm_beside_the_goals_marked_other_pose_stalls_and_goes_round() {
+    // The goal's first pose is inside a box; the arm, going for the free one, stops against
+    // that box a cell from the marked pose (found by `reaches_every_reachable_goal`: it
+    // counted as at the goal and waited there for ever).
+    let w = boxes(&[
+        (81, 56, 17, 9),
+        (71, 108, 34, 14),
+        (74, 70, 23, 23),
+        (83, 108, 6, 6),
+        (48, 121, 29, 4),
+        (83, 59, 9, 38),
+        (79, 79, 20, 5),
+    ]);
+    let r = run(&w, [108, 78], [92, 68], 120_000);
+    assert!(r.arrived, "{r:?}");
+    assert!(!r.collided);
+}
+
+/// Runs an escape search to its end.
+fn escape_from(g: &Grid, from: [i32; 2], goal: [i32; 2]) -> Option<[i32; 2]> {
+    let mut e = Escape::new();
+    e.start(from, goal);
+    for _ in 0..1000 {
+        match e.work(g) {
+            escape::status::RUNNING => continue,
+            escape::status::FOUND => return Some(e.found()),
+            _ => return None,
+        }
+    }
+    panic!("the escape search did not end");
+}
+
+#[test]
+fn the_escape_search_never_crosses_a_wall() {
+    // A one-pixel wall along theta1 = 50; the arm a pixel from it at (49, 60), in blocked
+    // cells, with free cells a pixel beyond the wall (52, 60) nearer the goal than any on its
+    // own side, and a free cell on its own side at (47, 60).
+    let mut w = World::new();
+    w.rect([50, 0], [50, 127]);
+    let mut g = Grid::new();
+    let mut m = SliceMap {
+        words: &w.words,
+        stripes: &w.stripes,
+    };
+    g.refresh(&mut m, 128);
+    assert_eq!(g.blocked([49, 60]), 1);
+    assert_eq!(g.blocked([52, 60]), 0);
+    let c = escape_from(&g, [49, 60], [70, 60]).expect("a free cell on the arm's side");
+    assert_eq!(c, [48, 60]);
+    // Walled in on every side by blocked cells deeper than the search: none.
+    let mut w = World::new();
+    for k in 0..128 {
+        if k % 2 == 0 {
+            w.rect([0, k], [127, k]);
+        }
+    }
+    let mut g = Grid::new();
+    let mut m = SliceMap {
+        words: &w.words,
+        stripes: &w.stripes,
+    };
+    g.refresh(&mut m, 128);
+    assert_eq!(escape_from(&g, [10, 11], [70, 60]), None);
+}
+
+#[test]
+fn the_escape_search_finds_the_nearest_free_cell_and_of_those_the_one_nearest_the_goal() {
+    // A pocket of blocked cells: the gap of one pixel row (y = 61) between two bars,
+    // y 58..60 and y 62..64, from x = 20 to x = 80. Free cells at its mouths are 2 steps
+    // beyond the bars' ends (x = 18 and x = 82, the bars' margins are blocked).
+    let mut w = World::new();
+    w.rect([20, 58], [80, 60]);
+    w.rect([20, 62], [80, 64]);
+    let mut g = Grid::new();
+    let mut m = SliceMap {
+        words: &w.words,
+        stripes: &w.stripes,
+    };
+    g.refresh(&mut m, 128);
+    // From x = 30 the left mouth is nearer (12 steps against 52).
+    assert_eq!(escape_from(&g, [30, 61], [100, 61]), Some([18, 61]));
+    // From the middle, equally far both ways: the one nearer the goal.
+    assert_eq!(escape_from(&g, [50, 61], [100, 61]), Some([82, 61]));
+    assert_eq!(escape_from(&g, [50, 61], [0, 61]), Some([18, 61]));
+}
