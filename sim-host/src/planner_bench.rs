@@ -32,7 +32,9 @@ pub struct Case {
 }
 
 /// The cases of the bench and the test: free space; an obstacle across the way that the
-/// planner must follow round; a goal inside an obstacle.
+/// planner must follow round; a goal inside an obstacle; an arm that stalls within the
+/// planner's clearance of a wall, where the planner searches for the way out
+/// (`planner::escape`) before it follows the wall.
 pub fn cases() -> Vec<Case> {
     vec![
         Case {
@@ -56,6 +58,13 @@ pub fn cases() -> Vec<Case> {
             wand_mm: (250, 150),
             passes: 1500,
         },
+        Case {
+            name: "stalled within the clearance",
+            disks: vec![(-40, 247, 46), (-229, 58, 21)],
+            start_rad: [0.7, 0.01],
+            wand_mm: (-178, 37),
+            passes: 1000,
+        },
     ]
 }
 
@@ -74,6 +83,8 @@ pub struct Report {
     pub modes: u32,
     /// Where the worst pass's cycles went: the five costliest functions.
     pub worst: Vec<(String, u64)>,
+    /// Searches for the way out of blocked cells the native board's planner made.
+    pub escapes: u32,
 }
 
 impl Report {
@@ -238,6 +249,7 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
         cycles: [cmin as f64, csum as f64 / n, cmax as f64],
         modes,
         worst,
+        escapes: native.planner().escapes(),
     })
 }
 
@@ -245,13 +257,13 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
 pub fn report(dir: &Path) -> Result<String, String> {
     let mut t = String::from(
         "planner image on the emulated 68020 at 16.7 MHz, against the native board pass for pass\n\
-         case                                    passes  agree  cycles/pass min / mean / max   rate mean / worst   modes\n",
+         case                                    passes  agree  cycles/pass min / mean / max   rate mean / worst   modes  escapes\n",
     );
     for c in cases() {
         let r = run(dir, &c)?;
         let [mean_hz, worst_hz] = r.rate_hz();
         t += &format!(
-            "{:<40}{:>6}  {:>5}  {:>8.0} / {:>8.0} / {:>8.0}   {:>6.0} / {:>6.0} Hz   {:#x}\n",
+            "{:<40}{:>6}  {:>5}  {:>8.0} / {:>8.0} / {:>8.0}   {:>6.0} / {:>6.0} Hz   {:#x}  {}\n",
             r.name,
             r.passes,
             if r.mismatch.is_none() { "yes" } else { "NO" },
@@ -260,7 +272,8 @@ pub fn report(dir: &Path) -> Result<String, String> {
             r.cycles[2],
             mean_hz,
             worst_hz,
-            r.modes
+            r.modes,
+            r.escapes
         );
         let names: Vec<String> = r
             .worst

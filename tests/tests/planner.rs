@@ -7,20 +7,30 @@ use system_tests::images_dir;
 use vme_map::records::{planner_mode, reflex_flags as rf};
 
 /// The image and the native board publish the same planner record after every pass, in
-/// free space, while following a wall and with a goal inside an obstacle; each case reaches
-/// the mode it is about.
+/// free space, while following a wall, with a goal inside an obstacle and with an arm
+/// stalled within the planner's clearance of a wall; each case reaches the mode it is about,
+/// and the last searches for the way out of the blocked cells (`planner::escape`).
 #[test]
 fn the_planner_image_matches_the_native_board_pass_for_pass() {
     let want = [
         1 << planner_mode::FREE,
         1 << planner_mode::WALL,
         1 << planner_mode::UNREACHABLE,
+        1 << planner_mode::WALL,
     ];
-    for (case, mode) in planner_bench::cases().iter().zip(want) {
+    let cases = planner_bench::cases();
+    assert_eq!(cases.len(), want.len());
+    for (case, mode) in cases.iter().zip(want) {
         let r = planner_bench::run(&images_dir(), case).unwrap();
         assert_eq!(r.mismatch, None, "{}", case.name);
         assert_ne!(r.modes & mode, 0, "{}: modes {:#x}", case.name, r.modes);
     }
+    let r = planner_bench::run(&images_dir(), &cases[3]).unwrap();
+    assert!(
+        r.escapes > 0,
+        "{}: no search for the way out",
+        cases[3].name
+    );
 }
 
 /// 700 scenes of the campaign (seed 1; 535 of them solvable) with all five boards: no collision, at least 99% of

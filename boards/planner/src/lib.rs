@@ -77,6 +77,11 @@ impl Board {
         self.shell.id()
     }
 
+    /// The planner logic, for benches and tests to read its counters.
+    pub fn planner(&self) -> &Planner {
+        &self.planner
+    }
+
     /// Puts the outputs in their safe state and waits for the global RAM header.
     pub fn boot(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {
         safe(io);
