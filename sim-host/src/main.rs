@@ -114,9 +114,10 @@ enum Cmd {
     /// scene with a collision); exits 1 if any scene had a collision. `planner` runs
     /// `--scenes` random static scenes with all five boards, each judged by an A* oracle on
     /// the same C-space map (solvable or not, time estimate); writes summary.json,
-    /// scenes.csv, a scenario per scene with a collision or a missed goal and `--pictures`
-    /// C-space pictures with the oracle's path; exits 1 on a collision, a missed solvable
-    /// goal or an unsolvable goal not reported.
+    /// scenes.csv, a scenario per scene with a collision, a missed goal or an unsolvable
+    /// goal neither reported nor reached, and `--pictures` C-space pictures with the
+    /// oracle's path; exits 1 on a collision, a missed solvable goal or an unsolvable goal
+    /// not reported.
     Campaign {
         /// What to run (reflex, planner).
         what: String,
@@ -740,9 +741,17 @@ fn planner_campaign(
                     out.display()
                 );
             }
-            let unreported =
-                s.unsolvable[0] + s.unsolvable[1] - s.unsolvable_reported - s.unsolvable_reached;
-            if s.scenes_with_collisions > 0 || !s.missed_scenes.is_empty() || unreported > 0 {
+            if !s.unreported_scenes.is_empty() {
+                println!(
+                    "  unsolvable scenes neither reported nor reached: {:?} (replay: sim-host run {}/scene-<i>.toml)",
+                    s.unreported_scenes,
+                    out.display()
+                );
+            }
+            if s.scenes_with_collisions > 0
+                || !s.missed_scenes.is_empty()
+                || !s.unreported_scenes.is_empty()
+            {
                 ExitCode::FAILURE
             } else {
                 ExitCode::SUCCESS

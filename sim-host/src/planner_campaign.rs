@@ -594,6 +594,8 @@ pub struct Summary {
     pub collision_scenes: Vec<u64>,
     /// Indices of solvable scenes not reached.
     pub missed_scenes: Vec<u64>,
+    /// Indices of unsolvable scenes neither reported nor reached.
+    pub unreported_scenes: Vec<u64>,
     /// Wall-clock seconds.
     pub wall_s: f64,
 }
@@ -674,6 +676,11 @@ pub fn campaign(
         missed_scenes: solv
             .iter()
             .filter(|r| r.goal_time_s.is_none())
+            .map(|r| r.index)
+            .collect(),
+        unreported_scenes: uns
+            .iter()
+            .filter(|r| r.unreachable.is_none() && r.goal_time_s.is_none())
             .map(|r| r.index)
             .collect(),
         wall_s: start.elapsed().as_secs_f64(),
@@ -795,6 +802,7 @@ pub fn run_to_dir(
         .collision_scenes
         .iter()
         .chain(&summary.missed_scenes)
+        .chain(&summary.unreported_scenes)
     {
         std::fs::write(
             out.join(format!("scene-{i}.toml")),
