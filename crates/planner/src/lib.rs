@@ -213,6 +213,8 @@ pub struct Planner {
     /// way out of a pocket of blocked cells is searched.
     hold_urad: [i32; 2],
     unreachable_fills: u32,
+    /// Settled fills in a row that reached the goal.
+    reachable_fills: u32,
     last_request: [i32; 2],
     /// Free mode: the nearest the arm came to the goal (squared cells), and when.
     best_d2: i32,
@@ -302,6 +304,7 @@ impl Planner {
             wall_dir: 0,
             hold_urad: [0; 2],
             unreachable_fills: 0,
+            reachable_fills: 0,
             last_request: [0; 2],
             best_d2: i32::MAX,
             best_since_us: 0,
@@ -638,11 +641,14 @@ impl Planner {
         let r1 = self.fill.reached(cells[1]);
         if r0 == 1 || r1 == 1 {
             self.unreachable_fills = 0;
-            // Go for a pose the fill reached, clear of blocked cells if one is.
+            self.reachable_fills = self.reachable_fills.saturating_add(1);
+            let held = matches!(self.mode, Mode::Unreachable(_));
+            // Go for a pose the fill reached, clear of blocked cells if one is (a goal
+            // given up is taken up again only as below).
             let want = self.better_pose(self.base_pose);
             if want != self.base_pose {
                 self.base_pose = want;
-                if self.mode != Mode::Idle {
+                if self.mode != Mode::Idle && !held {
                     let theta = self.anchor_urad;
                     self.start_approach(0, theta);
                 }
@@ -652,16 +658,26 @@ impl Planner {
             // passes within a pixel of an obstacle (the fill through the marked pixels gets
             // there, the planner's moves cannot), taking it up again went round every
             // approach again, for ever (a case `reaches_every_reachable_goal` found).
+            // A goal found unreachable by the fills is taken up again when as many fills in
+            // a row reach it as it took to give it up: a goal on an obstacle's noisy edge
+            // (campaign seed 3 scene 691) flickered between given up and taken up again on
+            // single fills, the arm never long enough at either to be reported.
             if let Mode::Unreachable(why) = self.mode {
                 let clear = self.fill.reached_clear(cells[0]) == 1
                     || self.fill.reached_clear(cells[1]) == 1;
-                if why != reason::CYCLED || clear {
+                let again = if why == reason::CYCLED {
+                    clear
+                } else {
+                    self.reachable_fills >= UNREACHABLE_FILLS
+                };
+                if again {
                     let theta = self.hold_urad;
                     self.start_approach(0, theta);
                 }
             }
             return;
         }
+        self.reachable_fills = 0;
         self.unreachable_fills += 1;
         if self.unreachable_fills >= UNREACHABLE_FILLS {
             if let Mode::Unreachable(_) = self.mode {

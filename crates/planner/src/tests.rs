@@ -580,3 +580,75 @@ fn the_escape_search_finds_the_nearest_free_cell_and_of_those_the_one_nearest_th
     assert_eq!(escape_from(&g, [50, 61], [100, 61]), Some([82, 61]));
     assert_eq!(escape_from(&g, [50, 61], [0, 61]), Some([18, 61]));
 }
+
+#[test]
+fn a_goal_given_up_is_taken_up_again_only_after_two_fills_reach_it() {
+    // An enclosed goal (two link-1 stripes round both its poses), then one stripe taken
+    // away and put back before a second fill: a goal on an obstacle's noisy edge, which
+    // flickered between given up and taken up again on single fills (campaign seed 3 scene
+    // 691 was never reported).
+    let mut w = World::new();
+    let wand = wand_for([70, 40]);
+    let poses = goal::inverse(wand[0], wand[1]);
+    let (a, b) = (cell_of(poses[0])[0] & 127, cell_of(poses[1])[0] & 127);
+    let (lo, hi) = (a.min(b) - 3, a.max(b) + 3);
+    w.stripes[(lo & 127) as usize] = 1;
+    w.stripes[(hi & 127) as usize] = 1;
+    let start = [(hi + 10) & 127, 10];
+    let mut p = Planner::new();
+    let n = std::cell::Cell::new(0u32);
+    let step = |p: &mut Planner, w: &World| {
+        let theta = centre_urad(start);
+        let k = n.get();
+        let inp = Input {
+            servo: Some(ServoView {
+                theta_urad: theta,
+                omega_urad_s: [0; 2],
+                arrest_urad: theta,
+                t_us: k * 1000,
+                loops: k,
+            }),
+            reflex_flags: Some(rf::FROM_PLANNER),
+            wand_um: Some(wand),
+        };
+        let mut m = SliceMap {
+            words: &w.words,
+            stripes: &w.stripes,
+        };
+        n.set(k + 1);
+        p.step(&inp, &mut m).mode & 0xFF
+    };
+    let mut md = 0;
+    for _ in 0..20_000 {
+        md = step(&mut p, &w);
+        if md == mode::UNREACHABLE {
+            break;
+        }
+    }
+    assert_eq!(md, mode::UNREACHABLE);
+    // The band opened: the first fill that reaches the goal does not take it up.
+    w.stripes[(hi & 127) as usize] = 0;
+    while p.reachable_fills == 0 {
+        assert_eq!(step(&mut p, &w), mode::UNREACHABLE);
+        assert!(n.get() < 40_000, "no fill reached the goal");
+    }
+    // Closed again before the next fill: still given up.
+    w.stripes[(hi & 127) as usize] = 1;
+    while p.reachable_fills != 0 {
+        assert_eq!(step(&mut p, &w), mode::UNREACHABLE);
+        assert!(n.get() < 60_000, "no fill missed the goal");
+    }
+    // Open for good: taken up again after the second fill in a row that reaches it.
+    w.stripes[(hi & 127) as usize] = 0;
+    loop {
+        let before = p.reachable_fills;
+        if step(&mut p, &w) != mode::UNREACHABLE {
+            assert!(
+                before + 1 >= UNREACHABLE_FILLS,
+                "taken up after {before} fills"
+            );
+            break;
+        }
+        assert!(n.get() < 80_000, "never taken up again");
+    }
+}
