@@ -106,6 +106,13 @@ fn a_board_waits_for_the_global_ram_header_and_says_why() {
     let img = Image::load(&images_dir().join("planner.elf")).unwrap();
     let io = sim_host::devices::standalone(BoardId::Planner);
     sys.boards[0] = sim_host::emu::EmuBoard::new(BoardId::Planner, &img, io, &mut sys.global);
+    // Until the board has said something (its start-up copies 13 KiB of initial state: about
+    // 2 ms), and then a while longer: it must keep waiting.
+    let mut ms = 0.0;
+    while sys.status(BoardId::Planner).state() == Some(BoardState::Off) && ms < 10.0 {
+        sys.run_ms(0.1);
+        ms += 0.1;
+    }
     sys.run_ms(2.0);
     assert_eq!(sys.heartbeat(BoardId::Planner), 0);
     let st = sys.status(BoardId::Planner);
