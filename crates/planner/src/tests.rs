@@ -468,6 +468,17 @@ fn a_fault_hold_stops_the_progress_clock() {
     );
 }
 
+/// The planner's bitmap of `w`, read whole.
+fn grid_of(w: &World) -> Grid {
+    let mut g = Grid::new();
+    let mut m = SliceMap {
+        words: &w.words,
+        stripes: &w.stripes,
+    };
+    g.refresh(&mut m, 128);
+    g
+}
+
 /// The map of boxes `(x, y, w, h)` (cells, corners inclusive).
 fn boxes(b: &[(i32, i32, i32, i32)]) -> World {
     let mut w = World::new();
@@ -531,15 +542,10 @@ fn escape_from(g: &Grid, from: [i32; 2], goal: [i32; 2]) -> Option<[i32; 2]> {
 fn the_escape_search_never_crosses_a_wall() {
     // A one-pixel wall along theta1 = 50; the arm a pixel from it at (49, 60), in blocked
     // cells, with free cells a pixel beyond the wall (52, 60) nearer the goal than any on its
-    // own side, and a free cell on its own side at (47, 60).
+    // own side; the nearest free cell on its own side is (48, 60).
     let mut w = World::new();
     w.rect([50, 0], [50, 127]);
-    let mut g = Grid::new();
-    let mut m = SliceMap {
-        words: &w.words,
-        stripes: &w.stripes,
-    };
-    g.refresh(&mut m, 128);
+    let g = grid_of(&w);
     assert_eq!(g.blocked([49, 60]), 1);
     assert_eq!(g.blocked([52, 60]), 0);
     let c = escape_from(&g, [49, 60], [70, 60]).expect("a free cell on the arm's side");
@@ -551,12 +557,7 @@ fn the_escape_search_never_crosses_a_wall() {
             w.rect([0, k], [127, k]);
         }
     }
-    let mut g = Grid::new();
-    let mut m = SliceMap {
-        words: &w.words,
-        stripes: &w.stripes,
-    };
-    g.refresh(&mut m, 128);
+    let g = grid_of(&w);
     assert_eq!(escape_from(&g, [10, 11], [70, 60]), None);
 }
 
@@ -568,12 +569,7 @@ fn the_escape_search_finds_the_nearest_free_cell_and_of_those_the_one_nearest_th
     let mut w = World::new();
     w.rect([20, 58], [80, 60]);
     w.rect([20, 62], [80, 64]);
-    let mut g = Grid::new();
-    let mut m = SliceMap {
-        words: &w.words,
-        stripes: &w.stripes,
-    };
-    g.refresh(&mut m, 128);
+    let g = grid_of(&w);
     // From x = 30 the left mouth is nearer (12 steps against 52).
     assert_eq!(escape_from(&g, [30, 61], [100, 61]), Some([18, 61]));
     // From the middle, equally far both ways: the one nearer the goal.
