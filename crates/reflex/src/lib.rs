@@ -289,6 +289,9 @@ pub struct Reflex {
     planner_since_us: u32,
     stall_ref: [i32; 2],
     stall_since_us: u32,
+    /// Since when the arm has rested braking on an obstacle in its base rectangle (the
+    /// clock for [`FROZEN_US`] that the goal's changes do not restart).
+    braked_since_us: u32,
     /// The escape target of the previous pass (unwrapped pixels).
     escape_to: Option<[i32; 2]>,
     /// The wand position the goal was last computed from.
@@ -325,6 +328,7 @@ impl Reflex {
             planner_since_us: 0,
             stall_ref: [0; 2],
             stall_since_us: 0,
+            braked_since_us: 0,
             escape_to: None,
             wand_um: [0; 2],
             log: arrest_log::ArrestLog::new(),
@@ -361,6 +365,7 @@ impl Reflex {
             self.hold_at = sv.arrest_urad;
             self.stall_ref = sv.arrest_urad;
             self.stall_since_us = sv.t_us;
+            self.braked_since_us = sv.t_us;
         }
         if sv.loops == self.last_loops && !first {
             self.same_loops += 1;
@@ -520,7 +525,10 @@ impl Reflex {
         let mut tests = 0;
         let keep = MARGIN_U + obs_stop + wide + PIX_U / 8;
         let mut sub = [0; 2];
+        let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
+            && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
         if window::rect_free(map, a1.base, a2.base, &mut tests) {
+            self.braked_since_us = self.now_us;
             let g = Grow {
                 goal: [a1.goal_span(keep), a2.goal_span(keep)],
                 reach: [a1.reach(), a2.reach()],
@@ -545,9 +553,17 @@ impl Reflex {
             // pixel) cannot brake any further: it backs off to clearance, or would stand
             // frozen for good (planner campaign seed 2 scene 4: an arm 15 mm from a disk
             // never moved).
-            let frozen = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
-                && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S
-                && self.now_us.wrapping_sub(self.stall_since_us) > FROZEN_US;
+            // The time at rest braking counts too: the stall clock restarts with every new
+            // goal, and a planner that takes each stall for a wall and moves its request on
+            // restarted it every 200 ms; an arm a pixel from a disk in a channel never moved
+            // (planner campaign seed 1 scene 509: 36 wall-following episodes in 10 s, the
+            // goal 0.3 rad off).
+            if !at_rest {
+                self.braked_since_us = self.now_us;
+            }
+            let frozen = at_rest
+                && (self.now_us.wrapping_sub(self.stall_since_us) > FROZEN_US
+                    || self.now_us.wrapping_sub(self.braked_since_us) > FROZEN_US);
             let near = !window::rect_free(map, a1.own, a2.own, &mut tests)
                 || (frozen && !window::rect_free(map, a1.rest, a2.rest, &mut tests));
             if !near && window::rect_free(map, a1.core, a2.core, &mut tests) {

@@ -552,3 +552,47 @@ proptest! {
         prop_assert!((u - exact.floor()).abs() <= 1.0, "{a}: {u} vs {exact}");
     }
 }
+
+#[test]
+fn an_arm_resting_in_the_margin_backs_off_though_its_goal_keeps_changing() {
+    // Planner campaign seed 1 scene 509: the arm at rest a little over a quarter pixel from
+    // a wall, its own neighbourhood free but its base rectangle (with the margin for the
+    // obstacles' motion) not: it brakes, at rest, for good. A planner that takes each stall
+    // for a wall holds it for a moment (the goal at the arm) and moves its request on; that
+    // restarted the stall clock, so the arm never backed off and never moved in 10 s.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p - 6, p - 1, 0, 127);
+    // 70 angle units into pixel p: the wall's edge is 70 units away.
+    let th0 = [(p as f64 + 70.0 / 256.0) * PIX, 1.0];
+    let mut r = Reflex::default();
+    let mut th = th0;
+    for k in 1..=1500u32 {
+        // 200 ms toward a goal away from the wall, then 50 ms holding where the arm is.
+        let goal = if k % 250 < 200 {
+            [th0[0] + 0.5, 1.0]
+        } else {
+            th
+        };
+        let inp = Input {
+            servo: Some(servo_at(th, [0.0; 2], k)),
+            goal: planner(goal, k),
+            health: healthy(k),
+            obstacles_moving: false,
+        };
+        let o = r.step(&inp, &mut m.map());
+        if o.flags & flags::WAITING != 0 {
+            continue;
+        }
+        // The arm goes where it is told (at rest at the subgoal by the next pass).
+        th = sub(&o);
+        assert!(
+            !m.occupied(th[0], th[1]),
+            "pass {k}: entered the wall at {th:?}"
+        );
+    }
+    assert!(
+        th[0] > th0[0] + 0.25,
+        "the arm stayed at {th:?} (from {th0:?})"
+    );
+}
