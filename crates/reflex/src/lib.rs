@@ -289,9 +289,13 @@ pub struct Reflex {
     planner_since_us: u32,
     stall_ref: [i32; 2],
     stall_since_us: u32,
-    /// Since when the arm has rested braking on an obstacle in its base rectangle (the
-    /// clock for [`FROZEN_US`] that the goal's changes do not restart).
+    /// Since when the arm has rested braking on an obstacle in its base rectangle, pass
+    /// after pass (the clock for [`FROZEN_US`] that the goal's changes do not restart), and
+    /// the pass that last did: any other pass in between (moving, clear, a hold) restarts it.
     braked_since_us: u32,
+    braked_pass: u32,
+    /// Passes stepped.
+    pass: u32,
     /// The escape target of the previous pass (unwrapped pixels).
     escape_to: Option<[i32; 2]>,
     /// The wand position the goal was last computed from.
@@ -329,6 +333,8 @@ impl Reflex {
             stall_ref: [0; 2],
             stall_since_us: 0,
             braked_since_us: 0,
+            braked_pass: 0,
+            pass: 0,
             escape_to: None,
             wand_um: [0; 2],
             log: arrest_log::ArrestLog::new(),
@@ -344,6 +350,7 @@ impl Reflex {
     #[inline(never)]
     pub fn step<M: Map + ?Sized>(&mut self, inp: &Input, map: &mut M) -> Output {
         let mut out = Output::default();
+        self.pass = self.pass.wrapping_add(1);
         let Some(sv) = inp.servo else {
             self.torn += 1;
             if self.torn > SERVO_STALE_PASSES {
@@ -365,7 +372,6 @@ impl Reflex {
             self.hold_at = sv.arrest_urad;
             self.stall_ref = sv.arrest_urad;
             self.stall_since_us = sv.t_us;
-            self.braked_since_us = sv.t_us;
         }
         if sv.loops == self.last_loops && !first {
             self.same_loops += 1;
@@ -528,7 +534,6 @@ impl Reflex {
         let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
             && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
         if window::rect_free(map, a1.base, a2.base, &mut tests) {
-            self.braked_since_us = self.now_us;
             let g = Grow {
                 goal: [a1.goal_span(keep), a2.goal_span(keep)],
                 reach: [a1.reach(), a2.reach()],
@@ -557,9 +562,15 @@ impl Reflex {
             // goal, and a planner that takes each stall for a wall and moves its request on
             // restarted it every 200 ms; an arm a pixel from a disk in a channel never moved
             // (planner campaign seed 1 scene 509: 36 wall-following episodes in 10 s, the
-            // goal 0.3 rad off).
-            if !at_rest {
-                self.braked_since_us = self.now_us;
+            // goal 0.3 rad off). Counted over consecutive passes only: a clock left running
+            // through holds and start-up passes, which never get here, fired on the first
+            // braking pass (fig. VI.5 as images backed off at once and ended at the goal's
+            // other elbow).
+            if at_rest {
+                if self.braked_pass.wrapping_add(1) != self.pass {
+                    self.braked_since_us = self.now_us;
+                }
+                self.braked_pass = self.pass;
             }
             let frozen = at_rest
                 && (self.now_us.wrapping_sub(self.stall_since_us) > FROZEN_US
