@@ -20,17 +20,14 @@ fn the_planner_image_matches_the_native_board_pass_for_pass() {
     ];
     let cases = planner_bench::cases();
     assert_eq!(cases.len(), want.len());
-    for (case, mode) in cases.iter().zip(want) {
+    for (i, (case, mode)) in cases.iter().zip(want).enumerate() {
         let r = planner_bench::run(&images_dir(), case).unwrap();
         assert_eq!(r.mismatch, None, "{}", case.name);
         assert_ne!(r.modes & mode, 0, "{}: modes {:#x}", case.name, r.modes);
+        if i == 3 {
+            assert!(r.escapes > 0, "{}: no search for the way out", case.name);
+        }
     }
-    let r = planner_bench::run(&images_dir(), &cases[3]).unwrap();
-    assert!(
-        r.escapes > 0,
-        "{}: no search for the way out",
-        cases[3].name
-    );
 }
 
 /// 700 scenes of the campaign (seed 1; 535 of them solvable) with all five boards: no collision, at least 99% of

@@ -101,11 +101,6 @@ impl Escape {
         self.active = 1;
     }
 
-    /// Stops a search (the planner changed its mind).
-    pub fn stop(&mut self) {
-        self.active = 0;
-    }
-
     /// Works the search up to [`ROWS_PER_CYCLE`] rows on `g`: [`status`] says how it
     /// stands.
     #[inline(never)]

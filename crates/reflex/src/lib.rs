@@ -531,8 +531,6 @@ impl Reflex {
         let mut tests = 0;
         let keep = MARGIN_U + obs_stop + wide + PIX_U / 8;
         let mut sub = [0; 2];
-        let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
-            && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
         if window::rect_free(map, a1.base, a2.base, &mut tests) {
             let g = Grow {
                 goal: [a1.goal_span(keep), a2.goal_span(keep)],
@@ -566,6 +564,8 @@ impl Reflex {
             // through holds and start-up passes, which never get here, fired on the first
             // braking pass (fig. VI.5 as images backed off at once and ended at the goal's
             // other elbow).
+            let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
+                && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
             if at_rest {
                 if self.braked_pass.wrapping_add(1) != self.pass {
                     self.braked_since_us = self.now_us;
