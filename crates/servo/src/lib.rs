@@ -40,10 +40,22 @@ pub fn urad_to_q16(urad: i32) -> i32 {
     mul_shr(urad, 281_474_977, 32)
 }
 
-/// Q16 radians to micro-radians (x 10^6 / 2^16, rounded).
+/// Q16 radians to micro-radians (x 10^6 / 2^16, rounded: `mul_shr(q, 10^6, 16)`).
+///
+/// 10^6 / 2^16 is 15625 / 1024 = 15 + 265 / 1024, so within +-2^22 (64 rad, or rad/s) the
+/// result is `15 q + (265 q + 512) >> 10` exactly, in shifts and adds: the published state's
+/// six conversions were a `__fx_mul_shr16` call each (~120 cycles on the 68020). Outside
+/// that range the product.
 #[inline]
 pub fn q16_to_urad(q: i32) -> i32 {
-    mul_shr(q, 1_000_000, 16)
+    if (q as u32).wrapping_add(1 << 22) < 1 << 23 {
+        let q8 = q << 8;
+        let q3 = q << 3;
+        let q4 = q << 4;
+        (q4 - q) + ((q8 + q3 + q + 512) >> 10)
+    } else {
+        mul_shr(q, 1_000_000, 16)
+    }
 }
 
 /// The regime law III.36 is in, for tests and traces.
