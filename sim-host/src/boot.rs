@@ -246,6 +246,10 @@ pub struct Profile {
 /// emulated time one instruction at a time, charging each instruction's cycles to the
 /// function (nearest symbol at or below the PC) it belongs to.
 ///
+/// The servo board gets what it gets in the running system: a reflex subgoal (the arm's
+/// resting angles, 0 and 0) published every 0.25 ms with a new cycle, from power-up on
+/// (without it every pass is a hold waiting for a first subgoal).
+///
 /// `resting` (the sensing board): the host also publishes a servo state every 0.25 ms with
 /// the arm resting, its tip at the tip's lit beacon (`sensing_bench::RestingServo`), from
 /// power-up on: the board learns the drift from the tip and corrects every beacon.
@@ -287,7 +291,24 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
     }
     // The planner: an arm at rest, the wand in view, a reflex (planner_bench's records).
     let planner = board == BoardId::Planner;
+    let servo = board == BoardId::Servo;
     let mut k = 0;
+    let subgoal = |g: &mut [u8], k: u32| {
+        let rec = vme_map::records::ReflexSubgoal {
+            goal1_urad: 0,
+            goal2_urad: 0,
+            flags: 0,
+            cycle: k,
+        };
+        vme_map::REFLEX_SUBGOAL.publish(&mut ArrayBus::new(g), &rec);
+    };
+    if servo {
+        for _ in 0..800 {
+            k += 1;
+            subgoal(&mut sys.global, k);
+            sys.run_cycles(quarter_ms);
+        }
+    }
     if planner {
         for _ in 0..800 {
             crate::planner_bench::feed(&mut sys.global, [-1.0, 0.5], k, 0, (200, 250));
@@ -321,6 +342,10 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
             if planner {
                 crate::planner_bench::feed(&mut sys.global, [-1.0, 0.5], k, 0, (200, 250));
                 k += 1;
+            }
+            if servo {
+                k += 1;
+                subgoal(&mut sys.global, k);
             }
         }
     }
