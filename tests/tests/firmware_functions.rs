@@ -300,23 +300,42 @@ fn the_servo_image_steps_like_the_host() {
     let f = img
         .symbol("servo_probe_run")
         .expect("servo_probe_run in the image");
-    let n = 400u32;
+    const WORDS: usize = 16;
+    let n = 600u32;
     let mut inputs = Vec::new();
+    let mut cycles = Vec::new();
     let (mut t, mut s) = (0u32, 0x1234_5678u32);
     for i in 0..n {
         s = s.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-        t = t.wrapping_add(2667 + (s >> 29));
+        // ~750 passes a second with jitter, and one period over the 10 ms limit.
+        t = t.wrapping_add(2667 + (s >> 29) + if i == 400 { 25_000 } else { 0 });
         // Smoothstep toward the goals over 300 passes, in counts (32768 and 8192 per rev).
         let x = (i as f64 / 300.0).min(1.0);
         let p = x * x * (3.0 - 2.0 * x);
         let c1 = (p * 3.0 / std::f64::consts::TAU * 32768.0) as i32;
         let c2 = (-p / std::f64::consts::TAU * 8192.0) as i32;
+        // The subgoal: none at start-up and torn for a while (u32::MAX), its cycle kept
+        // for three passes (fresh, the same cycle again) and for 30 (1.33 ms passes: stale
+        // after 15), out of range for a few passes.
+        let cycle = match i {
+            0..=4 | 340..=344 => u32::MAX,
+            100..=199 => i / 3,
+            250..=279 => 250,
+            _ => i,
+        };
+        let goal1 = if (320..325).contains(&i) {
+            30_000_000
+        } else {
+            3_000_000
+        };
+        cycles.push(cycle);
         inputs.extend_from_slice(&[
             c1 as u16 as u32,
             c2 as u16 as u32,
             t & 0xFFFF,
-            3_000_000,
+            goal1 as u32,
             (-1_000_000i32) as u32,
+            cycle,
         ]);
     }
     let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
@@ -329,38 +348,55 @@ fn the_servo_image_steps_like_the_host() {
         .expect("the probe returns");
     assert_eq!(ret, 0);
     let mut host = servo::Servo::with_links(&servo::params::TUNED_AT_IMAGE_HZ);
-    let mut driving = 0;
+    let hold = |h: Option<servo::Hold>| h.map_or(0, |h| 1 + h as i32);
+    let (mut driving, mut faults) = (0, Vec::new());
     for i in 0..n as usize {
-        let w = &inputs[5 * i..5 * i + 5];
+        let w = &inputs[6 * i..6 * i + 6];
         let o = host.step(&servo::Input {
             enc: [w[0] as u16, w[1] as u16],
             timer: w[2] as u16,
-            subgoal: Some(servo::Subgoal {
+            subgoal: (cycles[i] != u32::MAX).then(|| servo::Subgoal {
                 goal_urad: [w[3] as i32, w[4] as i32],
-                cycle: i as u32,
+                cycle: cycles[i],
             }),
         });
-        let got: Vec<i32> = (0..4)
+        let got: Vec<i32> = (0..WORDS)
             .map(|k| {
-                let a = (out + 4 * (4 * i + k) as u32) as usize;
+                let a = (out + 4 * (WORDS * i + k) as u32) as usize;
                 i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
             })
             .collect();
-        assert_eq!(
-            got,
-            vec![
-                o.dac[0] as i32,
-                o.dac[1] as i32,
-                o.omega_q16[0],
-                o.omega_q16[1]
-            ],
-            "pass {i}"
-        );
+        let want = vec![
+            o.dac[0] as i32,
+            o.dac[1] as i32,
+            o.omega_q16[0],
+            o.omega_q16[1],
+            o.theta_q16[0],
+            o.theta_q16[1],
+            o.arrest_q16[0],
+            o.arrest_q16[1],
+            o.goal_q16[0],
+            o.goal_q16[1],
+            o.torque_q16[0],
+            o.torque_q16[1],
+            o.period_ticks as i32,
+            hold(o.hold),
+            hold(o.new_fault),
+            (o.regime[0] as i32) << 8 | o.regime[1] as i32 | (o.enable as i32) << 16,
+        ];
+        assert_eq!(got, want, "pass {i}");
         driving += (o.dac[0] != 0 && o.dac[1] != 0) as u32;
+        faults.extend(o.new_fault);
     }
     assert!(
         driving > 100,
         "the script drives both links ({driving} passes)"
+    );
+    use servo::Hold::*;
+    assert_eq!(
+        faults,
+        [Stale, OutOfRange, Torn],
+        "the script's faults, in order"
     );
 }
 

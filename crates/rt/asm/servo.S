@@ -574,3 +574,203 @@ servo_control_body:
     swap    %d0
     move.w  %d6, %d0
     rts
+
+/* ---- the common pass of Servo::step ----
+ * u32 __servo_pass(Servo *s, const u16 io[3], const i32 sub[3], u32 out[11]): io = both
+ * encoder latches and the timer, sub = the subgoal (both goals in urad, the reflex cycle).
+ * servo::Servo::step for a pass with a subgoal, no hold and the proximate law on both links
+ * (the caller checks those): first, changing nothing, the period and the subgoal's verdict;
+ * a subgoal out of range or stale returns 0 (the Rust then runs the pass). Otherwise, as
+ * the Rust does: the extended counts, the period, the observers' settling clock, both
+ * links' angles, observers and arrest points, the arrest log, the cycle's age, the goal,
+ * both links' law; out = the angles, velocities, arrest points and goals (two words
+ * each), both links' regime << 16 | DAC code, the period in ticks; returns 1.
+ * Offsets: servo::layout asserts them. */
+    /* Servo */
+    .equ SV_LAST_ENC, 2
+    .equ SV_COUNTS, 6
+    .equ SV_LAST_TIMER, 14
+    .equ SV_LINKS, 16
+    .equ SV_OBS, 20
+    .equ SV_LAW, 36
+    .equ SV_LAST_CYCLE, 140
+    .equ SV_HAS_CYCLE, 144
+    .equ SV_SINCE_CYCLE, 146
+    .equ SV_SINCE_START, 150
+    .equ SV_LOG, 166
+    /* ArrestLog */
+    .equ LOG_N, 0
+    .equ LOG_KEPT, 4
+    .equ LOG_T, 8
+    .equ LOG_ARREST, 520
+    /* out */
+    .equ F_THETA, 0
+    .equ F_OMEGA, 8
+    .equ F_ARREST, 16
+    .equ F_GOAL, 24
+    .equ F_CODE, 32
+    .equ F_TICKS, 40
+    /* servo::params::TIMER_TICK_Q40, servo's STALE_Q32, OBSERVER_SETTLE_Q32,
+     * ANGLE_LIMIT_URAD and urad_to_q16's multiplier (servo::layout asserts them) */
+    .equ TIMER_TICK_Q40, 549756
+    .equ STALE_Q32, 85899346
+    .equ SETTLE_Q32, 128849019
+    .equ ANGLE_LIMIT_URAD, 25000000
+    .equ URAD_TO_Q16_Q32, 281474977
+
+    .section .text.__servo_pass, "ax"
+    .globl __servo_pass
+__servo_pass:
+    movem.l %d2-%d7/%a2-%a6, -(%sp) /* arguments now at 48, 52, 56, 60 */
+    movea.l 48(%sp), %a6        /* s */
+    movea.l 52(%sp), %a0        /* io */
+    movea.l 56(%sp), %a1        /* sub */
+    movea.l 60(%sp), %a4        /* out */
+    /* the period: ticks = timer - last_timer (u16); dt = mul_shr(ticks, TIMER_TICK_Q40, 8) */
+    moveq   #0, %d3
+    move.w  4(%a0), %d3
+    sub.w   SV_LAST_TIMER(%a6), %d3
+    move.l  %d3, F_TICKS(%a4)
+    MULSHR  %d3, #TIMER_TICK_Q40, 8, %d1, %d7, %d7
+    /* the subgoal's verdict, nothing changed yet: both goals within the angle limit */
+    move.l  (%a1), %d0
+    tst.l   %d0                 /* (MOVE sets N too; the image check wants the test) */
+    bpl.s   1f
+    neg.l   %d0
+1:  cmpi.l  #ANGLE_LIMIT_URAD, %d0
+    bhi     .Lpass_rust         /* unsigned: i32::MIN's magnitude is 2^31 */
+    move.l  4(%a1), %d0
+    tst.l   %d0
+    bpl.s   2f
+    neg.l   %d0
+2:  cmpi.l  #ANGLE_LIMIT_URAD, %d0
+    bhi     .Lpass_rust
+    /* the cycle's age d4: 0 for a new cycle, else sat(age + dt), stale above STALE */
+    moveq   #0, %d4
+    move.l  8(%a1), %d0
+    tst.b   SV_HAS_CYCLE(%a6)
+    beq.s   3f
+    cmp.l   SV_LAST_CYCLE(%a6), %d0
+    bne.s   3f
+    move.l  SV_SINCE_CYCLE(%a6), %d4
+    add.l   %d3, %d4
+    SATV    %d4
+    cmpi.l  #STALE_Q32, %d4
+    bgt     .Lpass_rust
+3:  /* the common pass: from here on it changes the state */
+    move.l  %d0, SV_LAST_CYCLE(%a6)
+    move.b  #1, SV_HAS_CYCLE(%a6)
+    move.l  %d4, SV_SINCE_CYCLE(%a6)
+    /* the extended counts (wrapping), the encoder latches and the timer kept */
+    move.w  (%a0), %d0
+    sub.w   SV_LAST_ENC(%a6), %d0
+    ext.l   %d0
+    add.l   %d0, SV_COUNTS(%a6)
+    move.w  2(%a0), %d0
+    sub.w   SV_LAST_ENC+2(%a6), %d0
+    ext.l   %d0
+    add.l   %d0, SV_COUNTS+4(%a6)
+    move.l  (%a0), SV_LAST_ENC(%a6)
+    move.w  4(%a0), SV_LAST_TIMER(%a6)
+    movea.l %d3, %a5            /* dt */
+    /* link 1: the angle, the observer, the arrest point */
+    movea.l SV_LINKS(%a6), %a0
+    lea     SV_COUNTS(%a6), %a3
+    bsr     servo_angle
+    move.l  %d2, F_THETA(%a4)
+    lea     SV_OBS(%a6), %a1
+    lea     SV_LAW(%a6), %a2
+    move.l  %a5, %d3
+    bsr     servo_observe_body
+    move.l  %d0, F_ARREST(%a4)
+    /* link 2 */
+    lea     LINK_CONST_BYTES(%a0), %a0
+    addq.l  #4, %a3
+    bsr     servo_angle
+    move.l  %d2, F_THETA+4(%a4)
+    lea     SV_OBS+OBSERVER_BYTES(%a6), %a1
+    lea     SV_LAW+LINK_STATE_BYTES(%a6), %a2
+    move.l  %a5, %d3
+    bsr     servo_observe_body
+    move.l  %d0, F_ARREST+4(%a4)
+    move.l  SV_OBS+O_OMEGA(%a6), F_OMEGA(%a4)
+    move.l  SV_OBS+OBSERVER_BYTES+O_OMEGA(%a6), F_OMEGA+4(%a4)
+    /* the arrest log: at the newest time + dt >> 8 (Q24 s) */
+    lea     SV_LOG(%a6), %a0
+    move.l  LOG_N(%a0), %d0
+    move.l  %d0, %d1
+    subq.l  #1, %d1
+    andi.l  #127, %d1
+    add.l   %d1, %d1
+    add.l   %d1, %d1
+    move.l  LOG_T(%a0,%d1.l), %d2
+    move.l  %a5, %d1
+    asr.l   #8, %d1
+    add.l   %d1, %d2
+    move.l  %d0, %d1
+    andi.l  #127, %d1
+    add.l   %d1, %d1
+    add.l   %d1, %d1
+    move.l  %d2, LOG_T(%a0,%d1.l)
+    add.l   %d1, %d1
+    lea     LOG_ARREST(%a0), %a1
+    adda.l  %d1, %a1
+    move.l  F_ARREST(%a4), (%a1)+
+    move.l  F_ARREST+4(%a4), (%a1)
+    addq.l  #1, %d0
+    move.l  %d0, LOG_N(%a0)
+    move.l  LOG_KEPT(%a0), %d0
+    move.l  %d0, %d1
+    lsr.l   #7, %d1
+    addq.l  #1, %d0
+    sub.l   %d1, %d0
+    move.l  %d0, LOG_KEPT(%a0)
+    /* the goal: urad_to_q16 of both (mul_shr(g, URAD_TO_Q16_Q32, 32)) */
+    movea.l 56(%sp), %a1
+    move.l  (%a1), %d0
+    MULSHR  %d0, #URAD_TO_Q16_Q32, 32, %d1, %d7, %d7
+    move.l  %d0, F_GOAL(%a4)
+    move.l  4(%a1), %d0
+    MULSHR  %d0, #URAD_TO_Q16_Q32, 32, %d1, %d7, %d7
+    move.l  %d0, F_GOAL+4(%a4)
+    /* the observers' settling clock: settled once it reached SETTLE, else it counts
+     * min(dt, MAX_DT) (wrapping, as the release build's +=) */
+    suba.l  %a3, %a3            /* a3 = settled (0) */
+    move.l  SV_SINCE_START(%a6), %d0
+    cmpi.l  #SETTLE_Q32, %d0
+    blt.s   4f
+    movea.w #1, %a3
+    bra.s   5f
+4:  move.l  %a5, %d1
+    cmpi.l  #MAX_DT_Q32, %d1
+    ble.s   6f
+    move.l  #MAX_DT_Q32, %d1
+6:  add.l   %d1, %d0
+    move.l  %d0, SV_SINCE_START(%a6)
+5:  /* the law of both links: err = theta - goal (wrapping); a4 = dt, a5 = settled */
+    exg     %a3, %a5
+    movea.l %a3, %a4
+    movea.l SV_LINKS(%a6), %a2
+    lea     SV_LAW(%a6), %a3
+    movea.l 60(%sp), %a0
+    move.l  F_THETA(%a0), %d2
+    sub.l   F_GOAL(%a0), %d2
+    move.l  F_OMEGA(%a0), %d3
+    bsr     servo_control_body
+    movea.l 60(%sp), %a0
+    move.l  %d0, F_CODE(%a0)
+    lea     LINK_CONST_BYTES(%a2), %a2
+    lea     LINK_STATE_BYTES(%a3), %a3
+    move.l  F_THETA+4(%a0), %d2
+    sub.l   F_GOAL+4(%a0), %d2
+    move.l  F_OMEGA+4(%a0), %d3
+    bsr     servo_control_body
+    movea.l 60(%sp), %a0
+    move.l  %d0, F_CODE+4(%a0)
+    moveq   #1, %d0
+    movem.l (%sp)+, %d2-%d7/%a2-%a6
+    rts
+.Lpass_rust:
+    moveq   #0, %d0
+    movem.l (%sp)+, %d2-%d7/%a2-%a6
+    rts

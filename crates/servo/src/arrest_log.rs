@@ -44,6 +44,16 @@ impl ArrestLog {
         }
     }
 
+    /// Byte offsets of the fields, for `__servo_pass` (`servo::layout` asserts the values
+    /// it uses).
+    pub const N_OFFSET: usize = core::mem::offset_of!(ArrestLog, n);
+    /// See [`ArrestLog::N_OFFSET`].
+    pub const KEPT_OFFSET: usize = core::mem::offset_of!(ArrestLog, kept);
+    /// See [`ArrestLog::N_OFFSET`].
+    pub const T_OFFSET: usize = core::mem::offset_of!(ArrestLog, t);
+    /// See [`ArrestLog::N_OFFSET`].
+    pub const ARREST_OFFSET: usize = core::mem::offset_of!(ArrestLog, arrest);
+
     /// The time of the newest entry (0 when nothing was logged).
     pub fn newest_t(&self) -> u32 {
         self.t[(self.n.wrapping_sub(1) as usize) & (PASSES - 1)]

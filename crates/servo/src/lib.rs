@@ -34,10 +34,13 @@ use params::{LinkConst, TIMER_TICK_Q40};
 /// One fixed-point unit (1.0 in Q16).
 pub const ONE_Q16: i32 = 1 << 16;
 
+/// 2^16 / 10^6 in Q32, rounded: [`urad_to_q16`]'s multiplier (also `__servo_pass`'s).
+pub const URAD_TO_Q16_Q32: i32 = 281_474_977;
+
 /// Micro-radians to Q16 radians (x 2^16 / 10^6 as a Q32 multiplier, rounded).
 #[inline]
 pub fn urad_to_q16(urad: i32) -> i32 {
-    mul_shr(urad, 281_474_977, 32)
+    mul_shr(urad, URAD_TO_Q16_Q32, 32)
 }
 
 /// Q16 radians to micro-radians (x 10^6 / 2^16, rounded: `mul_shr(q, 10^6, 16)`).
@@ -575,6 +578,37 @@ pub mod layout {
     /// Bytes of one link's control state.
     pub const LINK_STATE_BYTES: usize = 52;
     const _: () = assert!(size_of::<LinkState>() == LINK_STATE_BYTES);
+    /// Words `__servo_pass` writes: angles, velocities, arrest points, goals (two each),
+    /// both links' `regime << 16 | DAC code`, the period in timer ticks.
+    pub const PASS_OUT_WORDS: usize = 11;
+    // The constants `__servo_pass` holds as `.equ`s.
+    const _: () = assert!(crate::params::TIMER_TICK_Q40 == 549_756);
+    const _: () = assert!(super::STALE_Q32 == 85_899_346);
+    const _: () = assert!(super::OBSERVER_SETTLE_Q32 == 128_849_019);
+    const _: () = assert!(super::MAX_DT_Q32 == 42_949_673);
+    const _: () = assert!(super::ANGLE_LIMIT_URAD == 25_000_000);
+    const _: () = assert!(super::URAD_TO_Q16_Q32 == 281_474_977);
+    // `Servo` and its arrest log as the image lays them out (an `i32` aligns to 2 on the
+    // 68020, and a pointer is 4 bytes): `__servo_pass` uses these offsets.
+    #[cfg(target_arch = "m68k")]
+    const _: () = {
+        use super::arrest_log::{ArrestLog, PASSES};
+        use super::Servo;
+        assert!(offset_of!(Servo, last_enc) == 2);
+        assert!(offset_of!(Servo, counts) == 6);
+        assert!(offset_of!(Servo, last_timer) == 14);
+        assert!(offset_of!(Servo, links) == 16);
+        assert!(offset_of!(Servo, obs) == 20);
+        assert!(offset_of!(Servo, law) == 36);
+        assert!(offset_of!(Servo, last_cycle) == 140);
+        assert!(offset_of!(Servo, has_cycle) == 144);
+        assert!(offset_of!(Servo, since_cycle_q32) == 146);
+        assert!(offset_of!(Servo, since_start_q32) == 150);
+        assert!(offset_of!(Servo, log) == 166);
+        assert!(ArrestLog::N_OFFSET == 0 && ArrestLog::KEPT_OFFSET == 4);
+        assert!(ArrestLog::T_OFFSET == 8 && ArrestLog::ARREST_OFFSET == 8 + 4 * PASSES);
+        assert!(PASSES == 128);
+    };
 
     /// Writes the words `w` big-endian from byte 0 on.
     fn words<const N: usize>(w: &[i32]) -> [u8; N] {
@@ -735,7 +769,11 @@ pub struct Servo {
     links: &'static [LinkConst; 2],
     obs: [Observer; 2],
     law: [LinkState; 2],
-    last_cycle: Option<u32>,
+    /// The reflex cycle of the last subgoal (meaningful once `has_cycle`).
+    last_cycle: u32,
+    /// Whether a subgoal has arrived since start-up. (Two plain fields, not an
+    /// `Option<u32>`: the image's `__servo_pass` reads and writes them.)
+    has_cycle: bool,
     since_cycle_q32: i32,
     since_start_q32: i32,
     hold_goal_q16: Option<[i32; 2]>,
@@ -768,7 +806,8 @@ impl Servo {
             links,
             obs: [Observer::at(0); 2],
             law: [LinkState::new(&links[0]), LinkState::new(&links[1])],
-            last_cycle: None,
+            last_cycle: 0,
+            has_cycle: false,
             since_cycle_q32: 0,
             since_start_q32: 0,
             hold_goal_q16: None,
@@ -786,6 +825,10 @@ impl Servo {
     pub fn step(&mut self, input: &Input) -> Output {
         if !self.started {
             return self.first_step(input);
+        }
+        #[cfg(target_arch = "m68k")]
+        if let Some(o) = self.pass_in_asm(input) {
+            return o;
         }
         // Extend the 16-bit counters.
         let c0 =
@@ -849,6 +892,54 @@ impl Servo {
             new_fault,
             regime: [Regime::Linear; 2],
         }
+    }
+
+    /// The image's common pass in one call of `__servo_pass` (`crates/rt/asm/servo.S`): a
+    /// subgoal read whole, no hold, the proximate law on both links. The routine checks the
+    /// subgoal's range and age before it changes anything and returns 0 if the pass is not
+    /// the common one (out of range or stale); the Rust of [`Servo::step`] then runs it.
+    /// Does what the Rust does, bit for bit (`the_servo_image_steps_like_the_host`): the
+    /// counts, the period, the observers, the arrest log, the goal and the law.
+    #[cfg(target_arch = "m68k")]
+    #[inline(always)]
+    fn pass_in_asm(&mut self, input: &Input) -> Option<Output> {
+        extern "C" {
+            fn __servo_pass(s: *mut u8, io: *const u16, sub: *const i32, out: *mut u32) -> u32;
+        }
+        let sub = input.subgoal?;
+        if self.hold.is_some()
+            || self.hold_goal_q16.is_some()
+            || !(self.links[0].proximate && self.links[1].proximate)
+        {
+            return None;
+        }
+        let io = [input.enc[0], input.enc[1], input.timer];
+        let sw = [sub.goal_urad[0], sub.goal_urad[1], sub.cycle as i32];
+        let mut f = core::mem::MaybeUninit::<[u32; layout::PASS_OUT_WORDS]>::uninit();
+        // SAFETY: the routine reads the three I/O halfwords and three subgoal words, reads
+        // and updates `self` at the offsets `layout` asserts, and writes all of `f` when it
+        // returns 1 (and nothing of `self` or `f` when it returns 0).
+        let f = unsafe {
+            let me = (self as *mut Self).cast();
+            if __servo_pass(me, io.as_ptr(), sw.as_ptr(), f.as_mut_ptr().cast()) == 0 {
+                return None;
+            }
+            f.assume_init()
+        };
+        let [l0, l1] = &self.law;
+        Some(Output {
+            dac: [f[8] as u16 as i16, f[9] as u16 as i16],
+            enable: true,
+            theta_q16: [f[0] as i32, f[1] as i32],
+            omega_q16: [f[2] as i32, f[3] as i32],
+            arrest_q16: [f[4] as i32, f[5] as i32],
+            torque_q16: [l0.torque_q16, l1.torque_q16],
+            goal_q16: [f[6] as i32, f[7] as i32],
+            period_ticks: f[10] as u16,
+            hold: None,
+            new_fault: None,
+            regime: [regime_of(f[8] >> 16), regime_of(f[9] >> 16)],
+        })
     }
 
     /// Both links' angles (from the extended counts) and, after their observers' update,
@@ -998,14 +1089,15 @@ impl Servo {
         first: bool,
     ) -> ([i32; 2], Option<Hold>) {
         let verdict = match sub {
-            None if self.last_cycle.is_none() => Err(Hold::NoSubgoal),
+            None if !self.has_cycle => Err(Hold::NoSubgoal),
             None => {
                 self.since_cycle_q32 = self.since_cycle_q32.saturating_add(dt_q32);
                 Err(Hold::Torn)
             }
             Some(s) => {
-                if self.last_cycle != Some(s.cycle) {
-                    self.last_cycle = Some(s.cycle);
+                if !self.has_cycle || self.last_cycle != s.cycle {
+                    self.has_cycle = true;
+                    self.last_cycle = s.cycle;
                     self.since_cycle_q32 = 0;
                 } else if !first {
                     self.since_cycle_q32 = self.since_cycle_q32.saturating_add(dt_q32);

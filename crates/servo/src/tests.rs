@@ -375,7 +375,14 @@ fn the_shift_and_add_conversion_is_the_product_at_and_around_its_range_edges() {
     let edge = 1i32 << 22;
     let near = |c: i32| (c - 3000..=c + 3000).collect::<Vec<_>>();
     let mut qs: Vec<i32> = [near(0), near(edge), near(-edge), near(65536), near(-65536)].concat();
-    qs.extend([i32::MIN, i32::MIN + 1, i32::MAX, i32::MAX - 1, 140_737_488, -140_737_489]);
+    qs.extend([
+        i32::MIN,
+        i32::MIN + 1,
+        i32::MAX,
+        i32::MAX - 1,
+        140_737_488,
+        -140_737_489,
+    ]);
     for q in qs {
         assert_eq!(q16_to_urad(q), fx::host_mul_shr(q, 1_000_000, 16), "{q}");
     }
