@@ -179,7 +179,8 @@ fn symbol(board: &str, part: &str) -> u32 {
 
 #[test]
 fn gdb_attaches_to_a_board_breaks_steps_and_reads_memory() {
-    let step = symbol("servo", "5Servo4step");
+    // The board calls `Servo::step_into` every pass.
+    let step = symbol("servo", "5Servo9step_into");
     let elf = images_dir().join("servo.elf");
     let (tx, rx) = std::sync::mpsc::channel();
     let sim_thread = std::thread::spawn(move || {
@@ -234,7 +235,7 @@ fn gdb_attaches_to_a_board_breaks_steps_and_reads_memory() {
     let text =
         String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
     let hb = sim_thread.join().unwrap();
-    // Stopped at the reset vector's PC, then at the breakpoint in Servo::step.
+    // Stopped at the reset vector's PC, then at the breakpoint in Servo::step_into.
     let pcs: Vec<u32> = text
         .lines()
         .filter_map(|l| l.strip_prefix("pc"))

@@ -13,7 +13,7 @@
 use board_shell::Shell;
 use regs::servo::{AmpCtrl, ServoIo};
 use regs::IoBus;
-use servo::{q16_to_urad, Hold, Input, Servo, Subgoal};
+use servo::{q16_to_urad, Hold, Input, Output, Servo, Subgoal};
 use vme_map::record::Record;
 use vme_map::records::{ReflexSubgoal, ServoState};
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
@@ -29,6 +29,8 @@ pub struct Board {
     last_sub: Option<Subgoal>,
     /// Passes in a row the subgoal record read torn.
     torn: u8,
+    /// The servo's output of the last pass (written in place: `Servo::step_into`).
+    out: Output,
     servo: Servo,
 }
 
@@ -61,6 +63,7 @@ impl Board {
             loops: 0,
             last_sub: None,
             torn: 0,
+            out: Output::IDLE,
         }
     }
 
@@ -105,11 +108,15 @@ impl Board {
                 }
             }
         };
-        let out = self.servo.step(&Input {
-            enc,
-            timer,
-            subgoal,
-        });
+        self.servo.step_into(
+            &Input {
+                enc,
+                timer,
+                subgoal,
+            },
+            &mut self.out,
+        );
+        let out = &self.out;
         hw.set_dac(0, out.dac[0]);
         hw.set_dac(1, out.dac[1]);
         if out.enable {

@@ -576,15 +576,15 @@ servo_control_body:
     rts
 
 /* ---- the common pass of Servo::step ----
- * u32 __servo_pass(Servo *s, const u16 io[3], const i32 sub[3], u32 out[11]): io = both
+ * u32 __servo_pass(Servo *s, const u16 io[3], const i32 sub[3], Output *out): io = both
  * encoder latches and the timer, sub = the subgoal (both goals in urad, the reflex cycle).
  * servo::Servo::step for a pass with a subgoal, no hold and the proximate law on both links
  * (the caller checks those): first, changing nothing, the period and the subgoal's verdict;
  * a subgoal out of range or stale returns 0 (the Rust then runs the pass). Otherwise, as
  * the Rust does: the extended counts, the period, the observers' settling clock, both
  * links' angles, observers and arrest points, the arrest log, the cycle's age, the goal,
- * both links' law; out = the angles, velocities, arrest points and goals (two words
- * each), both links' regime << 16 | DAC code, the period in ticks; returns 1.
+ * both links' law; every field of out (servo::Output: no hold, no new fault, the
+ * amplifiers enabled); returns 1.
  * Offsets: servo::layout asserts them. */
     /* Servo */
     .equ SV_LAST_ENC, 2
@@ -603,13 +603,19 @@ servo_control_body:
     .equ LOG_KEPT, 4
     .equ LOG_T, 8
     .equ LOG_ARREST, 520
-    /* out */
-    .equ F_THETA, 0
-    .equ F_OMEGA, 8
-    .equ F_ARREST, 16
-    .equ F_GOAL, 24
-    .equ F_CODE, 32
-    .equ F_TICKS, 40
+    /* Output */
+    .equ F_DAC, 0
+    .equ F_ENABLE, 4
+    .equ F_THETA, 6
+    .equ F_OMEGA, 14
+    .equ F_ARREST, 22
+    .equ F_TORQUE, 30
+    .equ F_GOAL, 38
+    .equ F_TICKS, 46
+    .equ F_HOLD, 48
+    .equ F_NEW_FAULT, 49
+    .equ F_REGIME, 50
+    .equ HOLD_NONE, 255         /* Option<Hold>::None (this rustc puts the niche at 255) */
     /* servo::params::TIMER_TICK_Q40, servo's STALE_Q32, OBSERVER_SETTLE_Q32,
      * ANGLE_LIMIT_URAD and urad_to_q16's multiplier (servo::layout asserts them) */
     .equ TIMER_TICK_Q40, 549756
@@ -630,7 +636,7 @@ __servo_pass:
     moveq   #0, %d3
     move.w  4(%a0), %d3
     sub.w   SV_LAST_TIMER(%a6), %d3
-    move.l  %d3, F_TICKS(%a4)
+    move.l  %d3, %d5            /* the ticks, written once the pass is the common one */
     MULSHR  %d3, #TIMER_TICK_Q40, 8, %d1, %d7, %d7
     /* the subgoal's verdict, nothing changed yet: both goals within the angle limit */
     move.l  (%a1), %d0
@@ -658,6 +664,10 @@ __servo_pass:
     cmpi.l  #STALE_Q32, %d4
     bgt     .Lpass_rust
 3:  /* the common pass: from here on it changes the state */
+    move.w  %d5, F_TICKS(%a4)
+    move.b  #1, F_ENABLE(%a4)
+    move.b  #HOLD_NONE, F_HOLD(%a4)
+    move.b  #HOLD_NONE, F_NEW_FAULT(%a4)
     move.l  %d0, SV_LAST_CYCLE(%a6)
     move.b  #1, SV_HAS_CYCLE(%a6)
     move.l  %d4, SV_SINCE_CYCLE(%a6)
@@ -758,7 +768,10 @@ __servo_pass:
     move.l  F_OMEGA(%a0), %d3
     bsr     servo_control_body
     movea.l 60(%sp), %a0
-    move.l  %d0, F_CODE(%a0)
+    move.w  %d0, F_DAC(%a0)
+    swap    %d0
+    move.b  %d0, F_REGIME(%a0)
+    move.l  S_TORQUE(%a3), F_TORQUE(%a0)
     lea     LINK_CONST_BYTES(%a2), %a2
     lea     LINK_STATE_BYTES(%a3), %a3
     move.l  F_THETA+4(%a0), %d2
@@ -766,7 +779,10 @@ __servo_pass:
     move.l  F_OMEGA+4(%a0), %d3
     bsr     servo_control_body
     movea.l 60(%sp), %a0
-    move.l  %d0, F_CODE+4(%a0)
+    move.w  %d0, F_DAC+2(%a0)
+    swap    %d0
+    move.b  %d0, F_REGIME+1(%a0)
+    move.l  S_TORQUE(%a3), F_TORQUE+4(%a0)
     moveq   #1, %d0
     movem.l (%sp)+, %d2-%d7/%a2-%a6
     rts

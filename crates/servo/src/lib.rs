@@ -580,9 +580,31 @@ pub mod layout {
     /// Bytes of one link's control state.
     pub const LINK_STATE_BYTES: usize = 52;
     const _: () = assert!(size_of::<LinkState>() == LINK_STATE_BYTES);
-    /// Words `__servo_pass` writes: angles, velocities, arrest points, goals (two each),
-    /// both links' `regime << 16 | DAC code`, the period in timer ticks.
-    pub const PASS_OUT_WORDS: usize = 11;
+    // `Output` as the image lays it out, and the values `__servo_pass` writes into its
+    // enums: no hold (`Option<Hold>`'s `None`, a niche) and the regimes.
+    #[cfg(target_arch = "m68k")]
+    const _: () = {
+        use super::Output;
+        assert!(offset_of!(Output, dac) == 0);
+        assert!(offset_of!(Output, enable) == 4);
+        assert!(offset_of!(Output, theta_q16) == 6);
+        assert!(offset_of!(Output, omega_q16) == 14);
+        assert!(offset_of!(Output, arrest_q16) == 22);
+        assert!(offset_of!(Output, torque_q16) == 30);
+        assert!(offset_of!(Output, goal_q16) == 38);
+        assert!(offset_of!(Output, period_ticks) == 46);
+        assert!(offset_of!(Output, hold) == 48);
+        assert!(offset_of!(Output, new_fault) == 49);
+        assert!(offset_of!(Output, regime) == 50);
+    };
+    const _: () = assert!(size_of::<Option<super::Hold>>() == 1);
+    // SAFETY: `Option<Hold>` is one byte (asserted above); reading `None`'s byte. (Where
+    // the niche goes is the compiler's choice: the pinned nightly puts it at 255, stable
+    // 1.95 at 4; this assert is what keeps the routine's `HOLD_NONE` honest.)
+    const _: () = assert!(unsafe { core::mem::transmute::<Option<super::Hold>, u8>(None) } == 255);
+    const _: () = assert!(super::Regime::Saturated as u8 == 0);
+    const _: () = assert!(super::Regime::Sliding as u8 == 1);
+    const _: () = assert!(super::Regime::Linear as u8 == 2);
     // The constants `__servo_pass` holds as `.equ`s.
     const _: () = assert!(crate::params::TIMER_TICK_Q40 == 549_756);
     const _: () = assert!(super::STALE_Q32 == 85_899_346);
@@ -731,8 +753,10 @@ const STALE_Q32: i32 = consts::round(STALE_S * consts::Q32) as i32;
 /// Largest plausible absolute angle (the encoders' unwrap range is +-4 revolutions).
 pub const ANGLE_LIMIT_URAD: i32 = 25_000_000;
 
-/// What the servo computed this pass.
+/// What the servo computed this pass. `repr(C)`: `__servo_pass` writes it on the 68020
+/// ([`layout`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Output {
     /// DAC codes for both amplifiers.
     pub dac: [i16; 2],
@@ -756,6 +780,23 @@ pub struct Output {
     pub new_fault: Option<Hold>,
     /// The law's regime per link.
     pub regime: [Regime; 2],
+}
+
+impl Output {
+    /// An output before any pass: nothing commanded, amplifiers off, angles 0.
+    pub const IDLE: Output = Output {
+        dac: [0; 2],
+        enable: false,
+        theta_q16: [0; 2],
+        omega_q16: [0; 2],
+        arrest_q16: [0; 2],
+        torque_q16: [0; 2],
+        goal_q16: [0; 2],
+        period_ticks: 0,
+        hold: None,
+        new_fault: None,
+        regime: [Regime::Linear; 2],
+    };
 }
 
 /// The servo of both links. `repr(C)` with the arrest log last: LLVM's M68k backend reached
@@ -829,10 +870,28 @@ impl Servo {
             return self.first_step(input);
         }
         #[cfg(target_arch = "m68k")]
-        if let Some(o) = self.pass_in_asm(input) {
-            return o;
+        {
+            let mut o = core::mem::MaybeUninit::<Output>::uninit();
+            if self.pass_in_asm(input, o.as_mut_ptr()) {
+                // SAFETY: the routine wrote every field of `o`.
+                return unsafe { o.assume_init() };
+            }
         }
         self.step_rust(input)
+    }
+
+    /// [`Servo::step`] with the output written to `out`: on the 68020 the common pass
+    /// writes it in place (the board keeps it; a returned `Output` is copied once more).
+    pub fn step_into(&mut self, input: &Input, out: &mut Output) {
+        if !self.started {
+            *out = self.first_step(input);
+            return;
+        }
+        #[cfg(target_arch = "m68k")]
+        if self.pass_in_asm(input, out) {
+            return;
+        }
+        *out = self.step_rust(input);
     }
 
     /// A pass after the first in Rust (on the 68020: one that is not the common one).
@@ -912,44 +971,28 @@ impl Servo {
     /// counts, the period, the observers, the arrest log, the goal and the law.
     #[cfg(target_arch = "m68k")]
     #[inline(always)]
-    fn pass_in_asm(&mut self, input: &Input) -> Option<Output> {
+    fn pass_in_asm(&mut self, input: &Input, out: *mut Output) -> bool {
         extern "C" {
-            fn __servo_pass(s: *mut u8, io: *const u16, sub: *const i32, out: *mut u32) -> u32;
+            fn __servo_pass(s: *mut u8, io: *const u16, sub: *const i32, out: *mut u8) -> u32;
         }
-        let sub = input.subgoal?;
+        let Some(sub) = input.subgoal else {
+            return false;
+        };
         if self.hold.is_some()
             || self.hold_goal_q16.is_some()
             || !(self.links[0].proximate && self.links[1].proximate)
         {
-            return None;
+            return false;
         }
         let io = [input.enc[0], input.enc[1], input.timer];
         let sw = [sub.goal_urad[0], sub.goal_urad[1], sub.cycle as i32];
-        let mut f = core::mem::MaybeUninit::<[u32; layout::PASS_OUT_WORDS]>::uninit();
         // SAFETY: the routine reads the three I/O halfwords and three subgoal words, reads
-        // and updates `self` at the offsets `layout` asserts, and writes all of `f` when it
-        // returns 1 (and nothing of `self` or `f` when it returns 0).
-        let f = unsafe {
+        // and updates `self` at the offsets `layout` asserts, and writes every field of
+        // `out` when it returns 1 (and nothing of `self` or `out` when it returns 0).
+        unsafe {
             let me = (self as *mut Self).cast();
-            if __servo_pass(me, io.as_ptr(), sw.as_ptr(), f.as_mut_ptr().cast()) == 0 {
-                return None;
-            }
-            f.assume_init()
-        };
-        let [l0, l1] = &self.law;
-        Some(Output {
-            dac: [f[8] as u16 as i16, f[9] as u16 as i16],
-            enable: true,
-            theta_q16: [f[0] as i32, f[1] as i32],
-            omega_q16: [f[2] as i32, f[3] as i32],
-            arrest_q16: [f[4] as i32, f[5] as i32],
-            torque_q16: [l0.torque_q16, l1.torque_q16],
-            goal_q16: [f[6] as i32, f[7] as i32],
-            period_ticks: f[10] as u16,
-            hold: None,
-            new_fault: None,
-            regime: [regime_of(f[8] >> 16), regime_of(f[9] >> 16)],
-        })
+            __servo_pass(me, io.as_ptr(), sw.as_ptr(), out.cast()) != 0
+        }
     }
 
     /// Both links' angles (from the extended counts) and, after their observers' update,
