@@ -300,7 +300,7 @@ fn the_servo_image_steps_like_the_host() {
     let f = img
         .symbol("servo_probe_run")
         .expect("servo_probe_run in the image");
-    const WORDS: usize = 16;
+    const WORDS: usize = servo::Output::PROBE_WORDS;
     let n = 600u32;
     let mut inputs = Vec::new();
     let mut cycles = Vec::new();
@@ -348,7 +348,6 @@ fn the_servo_image_steps_like_the_host() {
         .expect("the probe returns");
     assert_eq!(ret, 0);
     let mut host = servo::Servo::with_links(&servo::params::TUNED_AT_IMAGE_HZ);
-    let hold = |h: Option<servo::Hold>| h.map_or(0, |h| 1 + h as i32);
     let (mut driving, mut faults) = (0, Vec::new());
     for i in 0..n as usize {
         let w = &inputs[6 * i..6 * i + 6];
@@ -366,24 +365,7 @@ fn the_servo_image_steps_like_the_host() {
                 i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
             })
             .collect();
-        let want = vec![
-            o.dac[0] as i32,
-            o.dac[1] as i32,
-            o.omega_q16[0],
-            o.omega_q16[1],
-            o.theta_q16[0],
-            o.theta_q16[1],
-            o.arrest_q16[0],
-            o.arrest_q16[1],
-            o.goal_q16[0],
-            o.goal_q16[1],
-            o.torque_q16[0],
-            o.torque_q16[1],
-            o.period_ticks as i32,
-            hold(o.hold),
-            hold(o.new_fault),
-            (o.regime[0] as i32) << 8 | o.regime[1] as i32 | (o.enable as i32) << 16,
-        ];
+        let want = o.probe_words().to_vec();
         assert_eq!(got, want, "pass {i}");
         driving += (o.dac[0] != 0 && o.dac[1] != 0) as u32;
         faults.extend(o.new_fault);

@@ -47,18 +47,15 @@ fn safe_stop() {
 /// Test probe (never called by the board): runs a fresh servo with the image's constants
 /// over `n` passes of scripted inputs (`inputs`: six words per pass: encoder 1, encoder 2,
 /// timer, link-1 goal, link-2 goal in micro-radians, the reflex cycle, `u32::MAX` for no
-/// subgoal) and writes [`PROBE_OUT_WORDS`] words per pass to `out`: both DAC codes, both
-/// observed velocities, angles, arrest points, goals and torques (Q16), the period in
-/// ticks, the hold and the new fault (0 none, else 1 + `Hold`), both regimes, the enable.
+/// subgoal) and writes the output's `Output::probe_words` per pass to `out`.
 /// The system tests compare it with the host.
 #[no_mangle]
 #[link_section = ".text.probe.servo_run"]
 pub extern "C" fn servo_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> i32 {
     let mut s = servo::Servo::with_links(&TUNED_AT_IMAGE_HZ);
-    let hold = |h: Option<servo::Hold>| h.map_or(0, |h| 1 + h as i32);
     let mut o = servo::Output::IDLE;
     for i in 0..n as usize {
-        // SAFETY: the caller passes 6 n input words and room for PROBE_OUT_WORDS n words.
+        // SAFETY: the caller passes 6 n input words and room for PROBE_WORDS n words.
         let w = |k: usize| unsafe { inputs.add(6 * i + k).read() };
         let cycle = w(5);
         let input = servo::Input {
@@ -76,31 +73,11 @@ pub extern "C" fn servo_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> 
         } else {
             s.step_into(&input, &mut o);
         }
-        let words = [
-            o.dac[0] as i32,
-            o.dac[1] as i32,
-            o.omega_q16[0],
-            o.omega_q16[1],
-            o.theta_q16[0],
-            o.theta_q16[1],
-            o.arrest_q16[0],
-            o.arrest_q16[1],
-            o.goal_q16[0],
-            o.goal_q16[1],
-            o.torque_q16[0],
-            o.torque_q16[1],
-            o.period_ticks as i32,
-            hold(o.hold),
-            hold(o.new_fault),
-            (o.regime[0] as i32) << 8 | o.regime[1] as i32 | (o.enable as i32) << 16,
-        ];
+        let words = o.probe_words();
         for (k, v) in words.iter().enumerate() {
             // SAFETY: as above.
-            unsafe { out.add(PROBE_OUT_WORDS * i + k).write(*v) };
+            unsafe { out.add(servo::Output::PROBE_WORDS * i + k).write(*v) };
         }
     }
     0
 }
-
-/// Words [`servo_probe_run`] writes per pass.
-const PROBE_OUT_WORDS: usize = 16;

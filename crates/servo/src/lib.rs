@@ -783,6 +783,35 @@ pub struct Output {
 }
 
 impl Output {
+    /// Words of [`Output::probe_words`].
+    pub const PROBE_WORDS: usize = 16;
+
+    /// The output as the words the servo image's test probe writes a pass (and the system
+    /// test compares with the host's): both DAC codes, both velocities, angles, arrest
+    /// points, goals and torques (Q16), the period in ticks, the hold and the new fault (0
+    /// none, else 1 + [`Hold`]), `regime 1 << 8 | regime 2 | enable << 16`.
+    pub fn probe_words(&self) -> [i32; Self::PROBE_WORDS] {
+        let hold = |h: Option<Hold>| h.map_or(0, |h| 1 + h as i32);
+        [
+            self.dac[0] as i32,
+            self.dac[1] as i32,
+            self.omega_q16[0],
+            self.omega_q16[1],
+            self.theta_q16[0],
+            self.theta_q16[1],
+            self.arrest_q16[0],
+            self.arrest_q16[1],
+            self.goal_q16[0],
+            self.goal_q16[1],
+            self.torque_q16[0],
+            self.torque_q16[1],
+            self.period_ticks as i32,
+            hold(self.hold),
+            hold(self.new_fault),
+            (self.regime[0] as i32) << 8 | self.regime[1] as i32 | (self.enable as i32) << 16,
+        ]
+    }
+
     /// An output before any pass: nothing commanded, amplifiers off, angles 0.
     pub const IDLE: Output = Output {
         dac: [0; 2],
