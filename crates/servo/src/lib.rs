@@ -895,18 +895,9 @@ impl Servo {
 
     /// One pass of the servo loop.
     pub fn step(&mut self, input: &Input) -> Output {
-        if !self.started {
-            return self.first_step(input);
-        }
-        #[cfg(target_arch = "m68k")]
-        {
-            let mut o = core::mem::MaybeUninit::<Output>::uninit();
-            if self.pass_in_asm(input, o.as_mut_ptr()) {
-                // SAFETY: the routine wrote every field of `o`.
-                return unsafe { o.assume_init() };
-            }
-        }
-        self.step_rust(input)
+        let mut out = Output::IDLE;
+        self.step_into(input, &mut out);
+        out
     }
 
     /// [`Servo::step`] with the output written to `out`: on the 68020 the common pass
@@ -924,8 +915,8 @@ impl Servo {
     }
 
     /// A pass after the first in Rust (on the 68020: one that is not the common one).
-    /// Not inlined: in [`Servo::step`] its registers and frame cost the image's common pass
-    /// 30 cycles (`sim-host profile servo`: 7,792 -> 7,762 busy cycles a pass).
+    /// Not inlined: in [`Servo::step_into`] its registers and frame cost the image's common
+    /// pass 65 cycles (`sim-host profile servo`: 7,410 inlined, 7,345 not).
     #[inline(never)]
     fn step_rust(&mut self, input: &Input) -> Output {
         // Extend the 16-bit counters.
