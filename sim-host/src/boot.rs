@@ -279,40 +279,41 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
         meter = Some(m.stats.clone());
         sys.boards[0].io = Box::new(m);
     }
-    // The reflex needs a servo, positions and a map that stay fresh: the host feeds them
-    // every 0.25 ms (the free-space case at rest of `sim-host bench reflex`).
-    let mut feed = (board == BoardId::Reflex).then(crate::reflex_bench::Feed::at_rest);
-    let quarter_ms = CPU_HZ / 4000;
-    if let Some(f) = feed.as_mut() {
-        for _ in 0..800 {
-            f.apply(&mut sys.bus());
-            sys.run_cycles(quarter_ms);
-        }
-    }
+    // What the host publishes every 0.25 ms for the board to find fresh. The reflex: a
+    // servo, positions and a map (the free-space case at rest of `sim-host bench reflex`).
     // The planner: an arm at rest, the wand in view, a reflex (planner_bench's records).
+    // The servo: a reflex subgoal with a new cycle (from 1: cycle 0 is "never published").
+    // The resting sensing board: the servo state of the resting arm.
+    let mut feed = (board == BoardId::Reflex).then(crate::reflex_bench::Feed::at_rest);
     let planner = board == BoardId::Planner;
     let servo = board == BoardId::Servo;
+    let warm_up = feed.is_some() || planner || servo;
     let mut k = 0;
-    let subgoal = |g: &mut [u8], k: u32| {
-        let rec = vme_map::records::ReflexSubgoal {
-            goal1_urad: 0,
-            goal2_urad: 0,
-            flags: 0,
-            cycle: k,
-        };
-        vme_map::REFLEX_SUBGOAL.publish(&mut ArrayBus::new(g), &rec);
-    };
-    if servo {
-        for _ in 0..800 {
-            k += 1;
-            subgoal(&mut sys.global, k);
-            sys.run_cycles(quarter_ms);
+    let mut feed_quarter = |g: &mut [u8]| {
+        if resting {
+            servo_feed.publish(&mut ArrayBus::new(g));
         }
-    }
-    if planner {
+        if let Some(f) = feed.as_mut() {
+            f.apply(&mut ArrayBus::new(g));
+        }
+        if planner {
+            crate::planner_bench::feed(g, [-1.0, 0.5], k, 0, (200, 250));
+        }
+        if servo {
+            let rec = vme_map::records::ReflexSubgoal {
+                goal1_urad: 0,
+                goal2_urad: 0,
+                flags: 0,
+                cycle: k + 1,
+            };
+            vme_map::REFLEX_SUBGOAL.publish(&mut ArrayBus::new(g), &rec);
+        }
+        k += 1;
+    };
+    let quarter_ms = CPU_HZ / 4000;
+    if warm_up {
         for _ in 0..800 {
-            crate::planner_bench::feed(&mut sys.global, [-1.0, 0.5], k, 0, (200, 250));
-            k += 1;
+            feed_quarter(&mut sys.global);
             sys.run_cycles(quarter_ms);
         }
     }
@@ -333,20 +334,7 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
         e.1 += 1;
         if b.cycles >= next_feed {
             next_feed += quarter_ms;
-            if resting {
-                servo_feed.publish(&mut ArrayBus::new(&mut sys.global));
-            }
-            if let Some(f) = feed.as_mut() {
-                f.apply(&mut ArrayBus::new(&mut sys.global));
-            }
-            if planner {
-                crate::planner_bench::feed(&mut sys.global, [-1.0, 0.5], k, 0, (200, 250));
-                k += 1;
-            }
-            if servo {
-                k += 1;
-                subgoal(&mut sys.global, k);
-            }
+            feed_quarter(&mut sys.global);
         }
     }
     let cycles = b.cycles - start;
