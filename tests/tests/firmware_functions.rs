@@ -290,6 +290,123 @@ fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
     }
 }
 
+/// Private I/O registers as plain halfwords, as the servo image's board probe keeps them.
+struct RamIo([u16; 32]);
+
+impl regs::IoBus for RamIo {
+    fn read16(&mut self, off: u32) -> u16 {
+        self.0[off as usize / 2]
+    }
+    fn write16(&mut self, off: u32, val: u16) {
+        self.0[off as usize / 2] = val;
+    }
+}
+
+/// The servo image's whole main-loop pass (`Board::poll_ports`: the common pass in
+/// `__servo_board_pass`, the rest in Rust; through its test probe) against the host's
+/// `Board::poll`, pass for pass: the published servo state record (sequence and words), the
+/// DAC and amplifier registers and the heartbeat must be identical. The script moves both
+/// links and takes the subgoal record through never published, fresh, the same cycle
+/// again, left untouched, stale, out of range, torn briefly and torn for long.
+#[test]
+fn the_servo_board_image_passes_like_the_host() {
+    use regs::servo::{AMP_CTRL, DAC0, DAC1, ENC0, ENC1, TIMER};
+    let (mut b, img, mut g) = board_of(BoardId::Servo);
+    let f = img
+        .symbol("servo_board_probe_run")
+        .expect("servo_board_probe_run in the image");
+    let n = 700u32;
+    let mut inputs = Vec::new();
+    let (mut t, mut s) = (0u32, 0x0bad_cafeu32);
+    for i in 0..n {
+        s = s.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+        // ~1,500 passes a second with jitter, and one period over the 10 ms limit.
+        t = t.wrapping_add(1333 + (s >> 29) + if i == 400 { 25_000 } else { 0 });
+        let x = (i as f64 / 300.0).min(1.0);
+        let p = x * x * (3.0 - 2.0 * x);
+        let c1 = (p * 3.0 / std::f64::consts::TAU * 32768.0) as i32;
+        let c2 = (-p / std::f64::consts::TAU * 8192.0) as i32;
+        let cycle = match i {
+            100..=199 => i / 3,
+            250..=289 => 250,
+            _ => i,
+        };
+        // 0: published whole; 1: torn; 2: left as it was (never published at first).
+        let mode = match i {
+            0..=4 | 450..=455 => 2,
+            340..=344 | 360..=375 => 1,
+            _ => 0,
+        };
+        let goal1: i32 = if (320..325).contains(&i) {
+            30_000_000
+        } else {
+            3_000_000
+        };
+        inputs.extend_from_slice(&[
+            c1 as u16 as u32,
+            c2 as u16 as u32,
+            t & 0xFFFF,
+            goal1 as u32,
+            (-1_000_000i32) as u32,
+            cycle,
+            mode,
+        ]);
+    }
+    let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
+    for (k, w) in inputs.iter().enumerate() {
+        let a = (inp + 4 * k as u32) as usize;
+        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    }
+    let (ret, _) = b
+        .call(&mut g, f, &[inp, n, out], 1_000_000_000)
+        .expect("the probe returns");
+    assert_eq!(ret, 0);
+    let mut mem = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut gb = ArrayBus::new(&mut mem);
+    let mut io = RamIo([0; 32]);
+    let mut host = board_servo::Board::with_links(&servo::params::TUNED_AT_IMAGE_HZ);
+    let (sub, state) = (
+        vme_map::REFLEX_SUBGOAL.offset(),
+        vme_map::SERVO_STATE.offset(),
+    );
+    let mut driving = 0;
+    for i in 0..n as usize {
+        let w = &inputs[7 * i..7 * i + 7];
+        use regs::IoBus;
+        io.write16(ENC0, w[0] as u16);
+        io.write16(ENC1, w[1] as u16);
+        io.write16(TIMER, w[2] as u16);
+        match w[6] {
+            0 => vme_map::REFLEX_SUBGOAL.publish_raw(&mut gb, &[w[3], w[4], 0, w[5]]),
+            1 => {
+                let seq = gb.read_u32(sub);
+                gb.write_u32(sub, seq | 1);
+            }
+            _ => {}
+        }
+        let hb = host.poll(&mut gb, &mut io);
+        let mut want: Vec<u32> = (0..11).map(|k| gb.read_u32(state + 4 * k)).collect();
+        want.extend([
+            io.read16(DAC0) as u32,
+            io.read16(DAC1) as u32,
+            io.read16(AMP_CTRL) as u32,
+            hb,
+        ]);
+        let got: Vec<u32> = (0..15)
+            .map(|k| {
+                let a = (out + 4 * (15 * i + k) as u32) as usize;
+                u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+            })
+            .collect();
+        assert_eq!(got, want, "pass {i}");
+        driving += (want[11] != 0 && want[12] != 0) as u32;
+    }
+    assert!(
+        driving > 100,
+        "the script drives both links ({driving} passes)"
+    );
+}
+
 /// The servo image's `Servo::step` (through its test probe) against the host's, pass for
 /// pass, over scripted inputs: a link-1 move of 3 rad and a link-2 move of -1 rad with the
 /// encoders following a smooth made-up trajectory, the timer at 750 Hz with jitter. DAC codes

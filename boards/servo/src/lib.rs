@@ -18,20 +18,78 @@ use vme_map::record::Record;
 use vme_map::records::{ReflexSubgoal, ServoState};
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
-/// The servo board's state between main-loop passes. `repr(C)`, the servo's state last
-/// (docs/toolchain.md, "Field order is a cost").
-#[repr(C)]
+/// The servo board's state between main-loop passes.
 pub struct Board {
     shell: Shell,
+    pass: PassState,
+}
+
+/// What a main-loop pass reads and updates besides the shell. `repr(C)`, the servo's state
+/// last (docs/toolchain.md, "Field order is a cost"): the image's `__servo_board_pass`
+/// (`crates/rt/asm/servo.S`) works on it at the offsets [`layout`] asserts.
+#[repr(C)]
+struct PassState {
+    /// 2 MHz timer ticks since start-up (the published time).
     ticks: u64,
+    /// Passes since start-up.
     loops: u32,
-    /// The subgoal last read whole.
-    last_sub: Option<Subgoal>,
+    /// The subgoal last read whole (meaningful once `has_sub`).
+    last_sub: Subgoal,
+    /// Whether a subgoal was ever read whole.
+    has_sub: bool,
     /// Passes in a row the subgoal record read torn.
     torn: u8,
     /// The servo's output of the last pass (written in place: `Servo::step_into`).
     out: Output,
     servo: Servo,
+}
+
+/// The addresses the image's board pass (`__servo_board_pass`) reads and writes: the
+/// private I/O registers it uses and the two global RAM records (each the address of the
+/// record's sequence word). The image's are [`Ports::MMIO`]; the test probe points them at
+/// ordinary RAM.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct Ports {
+    /// `regs::servo::ENC_CTRL`.
+    pub latch: u32,
+    /// `regs::servo::ENC0`.
+    pub enc0: u32,
+    /// `regs::servo::ENC1`.
+    pub enc1: u32,
+    /// `regs::servo::TIMER`.
+    pub timer: u32,
+    /// `regs::servo::DAC0`.
+    pub dac0: u32,
+    /// `regs::servo::DAC1`.
+    pub dac1: u32,
+    /// `regs::servo::AMP_CTRL`.
+    pub amp: u32,
+    /// `vme_map::REFLEX_SUBGOAL`, read.
+    pub subgoal: u32,
+    /// `vme_map::SERVO_STATE`, published.
+    pub state: u32,
+}
+
+impl Ports {
+    /// The ports with the private I/O at `io` and global RAM at `global` (base addresses).
+    pub const fn at(io: u32, global: u32) -> Self {
+        use regs::servo::{AMP_CTRL, DAC0, DAC1, ENC0, ENC1, ENC_CTRL, TIMER};
+        Self {
+            latch: io + ENC_CTRL,
+            enc0: io + ENC0,
+            enc1: io + ENC1,
+            timer: io + TIMER,
+            dac0: io + DAC0,
+            dac1: io + DAC1,
+            amp: io + AMP_CTRL,
+            subgoal: global + vme_map::REFLEX_SUBGOAL.offset(),
+            state: global + vme_map::SERVO_STATE.offset(),
+        }
+    }
+
+    /// The board's own: its private I/O and the VME window as the 68020 sees them.
+    pub const MMIO: Self = Self::at(regs::PRIVATE_IO_BASE, vme_map::GLOBAL_RAM_BASE);
 }
 
 /// Passes in a row the subgoal record may read torn (the reflex caught mid-publish) before
@@ -58,12 +116,18 @@ impl Board {
     pub const fn with_links(links: &'static [servo::params::LinkConst; 2]) -> Self {
         Self {
             shell: Shell::new(BoardId::Servo),
-            servo: Servo::with_links(links),
-            ticks: 0,
-            loops: 0,
-            last_sub: None,
-            torn: 0,
-            out: Output::IDLE,
+            pass: PassState {
+                ticks: 0,
+                loops: 0,
+                last_sub: Subgoal {
+                    goal_urad: [0; 2],
+                    cycle: 0,
+                },
+                has_sub: false,
+                torn: 0,
+                out: Output::IDLE,
+                servo: Servo::with_links(links),
+            },
         }
     }
 
@@ -83,6 +147,64 @@ impl Board {
     /// volatile moves, not dynamic calls.
     pub fn poll<G: GlobalBus + ?Sized>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
+        let st = self.pass.run(g, io);
+        self.end(g, st)
+    }
+
+    /// The end of a pass: a new fault into the status slot, then the heartbeat.
+    fn end<G: GlobalBus + ?Sized>(
+        &mut self,
+        g: &mut G,
+        (st, fault): (BoardState, Option<FaultCode>),
+    ) -> u32 {
+        if let Some(code) = fault {
+            // (Rare: through a dynamic bus, `&mut G` being one whatever G is.)
+            let mut bus = &mut *g;
+            self.shell
+                .life()
+                .degraded(&mut bus, code, vme_map::REFLEX_SUBGOAL.offset());
+        }
+        self.shell.end(g, st)
+    }
+
+    /// [`Board::poll`] as the image runs it: the common pass (a subgoal read whole at the
+    /// first try, the servo's common pass: `Servo::step_into`) in one call of
+    /// `__servo_board_pass`, which does what the Rust does, bit for bit
+    /// (`the_servo_board_image_passes_like_the_host`), through the addresses `ports`; any
+    /// other pass in the Rust. The routine decides before it changes anything but the
+    /// encoder latch and the last subgoal read whole (which the Rust then reads again).
+    #[cfg(target_arch = "m68k")]
+    pub fn poll_ports<G: GlobalBus + ?Sized>(
+        &mut self,
+        g: &mut G,
+        io: &mut impl IoBus,
+        ports: &Ports,
+    ) -> u32 {
+        extern "C" {
+            fn __servo_board_pass(p: *mut u8, ports: *const Ports) -> u32;
+        }
+        self.shell.begin(g, io);
+        // SAFETY: the routine reads and writes the pass state at the offsets `layout`
+        // asserts and the registers and records `ports` names (the caller's to map).
+        let common =
+            unsafe { __servo_board_pass((&mut self.pass as *mut PassState).cast(), ports) };
+        let st = if common != 0 {
+            (BoardState::Running, None)
+        } else {
+            self.pass.run(g, io)
+        };
+        self.end(g, st)
+    }
+}
+
+impl PassState {
+    /// One pass of the main loop between the shell's begin and end: sample, control,
+    /// drive, publish. Returns the board's state for the heartbeat and a new fault.
+    fn run<G: GlobalBus + ?Sized>(
+        &mut self,
+        g: &mut G,
+        io: &mut impl IoBus,
+    ) -> (BoardState, Option<FaultCode>) {
         let mut hw = ServoIo::new(&mut *io);
         let enc = hw.latch_encoders();
         let timer = hw.timer();
@@ -93,16 +215,17 @@ impl Board {
             Ok(_) => {
                 let r = ReflexSubgoal::from_words(&w);
                 self.torn = 0;
-                self.last_sub = Some(Subgoal {
+                self.last_sub = Subgoal {
                     goal_urad: [r.goal1_urad, r.goal2_urad],
                     cycle: r.cycle,
-                });
-                self.last_sub
+                };
+                self.has_sub = true;
+                Some(self.last_sub)
             }
             Err(_) => {
                 self.torn = self.torn.saturating_add(1);
-                if self.torn < TORN_PASSES {
-                    self.last_sub
+                if self.torn < TORN_PASSES && self.has_sub {
+                    Some(self.last_sub)
                 } else {
                     None
                 }
@@ -140,23 +263,16 @@ impl Board {
             loops: self.loops,
         };
         vme_map::SERVO_STATE.publish_raw(g, &state.to_words());
-        if let Some(why) = out.new_fault {
-            let code = match why {
-                Hold::Stale | Hold::NoSubgoal => FaultCode::StaleHeartbeat,
-                Hold::Torn => FaultCode::TornRecord,
-                Hold::OutOfRange => FaultCode::OutOfRange,
-            };
-            // (Rare: through a dynamic bus, `&mut G` being one whatever G is.)
-            let mut bus = &mut *g;
-            self.shell
-                .life()
-                .degraded(&mut bus, code, vme_map::REFLEX_SUBGOAL.offset());
-        }
+        let fault = out.new_fault.map(|why| match why {
+            Hold::Stale | Hold::NoSubgoal => FaultCode::StaleHeartbeat,
+            Hold::Torn => FaultCode::TornRecord,
+            Hold::OutOfRange => FaultCode::OutOfRange,
+        });
         let st = match out.hold {
             Some(Hold::NoSubgoal) | None => BoardState::Running,
             Some(_) => BoardState::Degraded,
         };
-        self.shell.end(g, st)
+        (st, fault)
     }
 }
 
@@ -164,4 +280,35 @@ impl Board {
 /// safe-stop hook after a fault.
 pub fn safe(io: &mut impl IoBus) {
     regs::servo::ServoIo::new(io).safe();
+}
+
+/// The layout `__servo_board_pass` (`crates/rt/asm/servo.S`) assumes, asserted on the
+/// image's target: its `.equ`s name these numbers.
+#[cfg(target_arch = "m68k")]
+mod layout {
+    use super::{PassState, Ports};
+    use core::mem::offset_of;
+    use regs::servo::{AmpCtrl, EncCtrl};
+    const _: () = assert!(offset_of!(PassState, ticks) == 0);
+    const _: () = assert!(offset_of!(PassState, loops) == 8);
+    const _: () = assert!(offset_of!(PassState, last_sub) == 12);
+    const _: () = assert!(offset_of!(PassState, has_sub) == 24);
+    const _: () = assert!(offset_of!(PassState, torn) == 25);
+    const _: () = assert!(offset_of!(PassState, out) == 26);
+    const _: () = assert!(offset_of!(PassState, servo) == 80);
+    const _: () = assert!(offset_of!(Ports, latch) == 0);
+    const _: () = assert!(offset_of!(Ports, enc0) == 4);
+    const _: () = assert!(offset_of!(Ports, enc1) == 8);
+    const _: () = assert!(offset_of!(Ports, timer) == 12);
+    const _: () = assert!(offset_of!(Ports, dac0) == 16);
+    const _: () = assert!(offset_of!(Ports, dac1) == 20);
+    const _: () = assert!(offset_of!(Ports, amp) == 24);
+    const _: () = assert!(offset_of!(Ports, subgoal) == 28);
+    const _: () = assert!(offset_of!(Ports, state) == 32);
+    // The values it writes: the latch command, both amplifiers enabled; and the records'
+    // sizes (4 subgoal words: goals, flags, cycle; 10 state words).
+    const _: () = assert!(EncCtrl::LATCH.bits() == 1);
+    const _: () = assert!(AmpCtrl::ENABLE0.bits() | AmpCtrl::ENABLE1.bits() == 3);
+    const _: () = assert!(<vme_map::records::ReflexSubgoal as vme_map::record::Record>::WORDS == 4);
+    const _: () = assert!(<vme_map::records::ServoState as vme_map::record::Record>::WORDS == 10);
 }

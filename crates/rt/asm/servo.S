@@ -578,9 +578,10 @@ servo_control_body:
 /* ---- the common pass of Servo::step ----
  * u32 __servo_pass(Servo *s, const u16 io[3], const i32 sub[3], Output *out): io = both
  * encoder latches and the timer, sub = the subgoal (both goals in urad, the reflex cycle).
- * servo::Servo::step for a pass with a subgoal, no hold and the proximate law on both links
- * (the caller checks those): first, changing nothing, the period and the subgoal's verdict;
- * a subgoal out of range or stale returns 0 (the Rust then runs the pass). Otherwise, as
+ * servo::Servo::step for a pass after the first with a subgoal, no hold (nor a hold's goal)
+ * and the proximate law on both links: first, changing nothing, it checks those, the period
+ * and the subgoal's verdict; a pass that is not that one, or a subgoal out of range or
+ * stale, returns 0 (the Rust then runs the pass). Otherwise, as
  * the Rust does: the extended counts, the period, the observers' settling clock, both
  * links' angles, observers and arrest points, the arrest log, the cycle's age, the goal,
  * both links' law; every field of out (servo::Output: no hold, no new fault, the
@@ -597,7 +598,11 @@ servo_control_body:
     .equ SV_HAS_CYCLE, 144
     .equ SV_SINCE_CYCLE, 146
     .equ SV_SINCE_START, 150
-    .equ SV_LOG, 166
+    .equ SV_HAS_HOLD_GOAL, 162
+    .equ SV_HOLD, 163
+    .equ SV_LOG, 164
+    /* LinkConst::proximate */
+    .equ K_PROXIMATE, 128
     /* ArrestLog */
     .equ LOG_N, 0
     .equ LOG_KEPT, 4
@@ -632,6 +637,18 @@ __servo_pass:
     movea.l 52(%sp), %a0        /* io */
     movea.l 56(%sp), %a1        /* sub */
     movea.l 60(%sp), %a4        /* out */
+    /* the common pass only: started, no hold nor hold goal, both links proximate */
+    tst.b   (%a6)               /* started */
+    beq     .Lpass_rust
+    cmpi.b  #HOLD_NONE, SV_HOLD(%a6)
+    bne     .Lpass_rust
+    tst.b   SV_HAS_HOLD_GOAL(%a6)
+    bne     .Lpass_rust
+    movea.l SV_LINKS(%a6), %a2
+    tst.b   K_PROXIMATE(%a2)
+    beq     .Lpass_rust
+    tst.b   LINK_CONST_BYTES+K_PROXIMATE(%a2)
+    beq     .Lpass_rust
     /* the period: ticks = timer - last_timer (u16); dt = mul_shr(ticks, TIMER_TICK_Q40, 8) */
     moveq   #0, %d3
     move.w  4(%a0), %d3
@@ -789,4 +806,191 @@ __servo_pass:
 .Lpass_rust:
     moveq   #0, %d0
     movem.l (%sp)+, %d2-%d7/%a2-%a6
+    rts
+
+/* ---- the board's common pass ----
+ * u32 __servo_board_pass(PassState *b, const Ports *p): board_servo's PassState::run for a
+ * pass whose subgoal record reads whole at the first try and whose servo pass is
+ * __servo_pass's: latch and read both encoders, read the timer, read the subgoal record
+ * (sequence, four words, sequence) and keep it, run __servo_pass into b->out, write both
+ * DACs and the amplifier enables, count the time and the pass, and publish the servo state
+ * under its sequence lock (the six angles in urad as servo::q16_to_urad, the torques in
+ * mN m). Returns 1; or 0 when the record is torn or was never published, or __servo_pass
+ * returned 0, having changed nothing but the encoder latch and the subgoal kept (the Rust
+ * then runs the pass and reads both again).
+ * Offsets: board_servo's layout module asserts them. */
+    /* PassState */
+    .equ B_TICKS, 0
+    .equ B_LOOPS, 8
+    .equ B_LAST_SUB, 12
+    .equ B_HAS_SUB, 24
+    .equ B_TORN, 25
+    .equ B_OUT, 26
+    .equ B_SERVO, 80
+    /* Ports */
+    .equ P_LATCH, 0
+    .equ P_ENC0, 4
+    .equ P_ENC1, 8
+    .equ P_TIMER, 12
+    .equ P_DAC0, 16
+    .equ P_DAC1, 20
+    .equ P_AMP, 24
+    .equ P_SUB, 28
+    .equ P_STATE, 32
+    /* regs::servo::EncCtrl::LATCH, AmpCtrl::ENABLE0 | ENABLE1 */
+    .equ ENC_LATCH, 1
+    .equ AMP_BOTH, 3
+
+/* Q16_TO_URAD r, t, u: r = servo::q16_to_urad(r): 15 r + (265 r + 512) >> 10 within
+ * +-2^22, else mul_shr(r, 10^6, 16) (out of line); t, u scratch data registers. */
+.macro Q16_TO_URAD r, t, u
+    move.l  \r, \t
+    addi.l  #0x400000, \t
+    cmpi.l  #0x800000, \t
+    bcc     .Lqb\@
+    move.l  \r, \t
+    lsl.l   #4, \t
+    sub.l   \r, \t              /* 15 r */
+    move.l  \r, \u
+    lsl.l   #8, \u
+    add.l   \r, \u              /* 257 r */
+    lsl.l   #3, \r
+    add.l   \u, \r              /* 265 r */
+    addi.l  #512, \r
+    asr.l   #8, \r
+    asr.l   #2, \r
+    add.l   \t, \r
+.Lqd\@:
+    .subsection 1
+.Lqb\@:
+    MULSHR  \r, #1000000, 16, \t, \u, \u
+    .subsection 1               /* (MULSHR ends in subsection 0) */
+    bra     .Lqd\@
+    .subsection 0
+.endm
+
+/* MNM r, t: r = (r * 1000) >> 16 (wrapping, as the board's), 1000 r as 1024 r - 24 r. */
+.macro MNM r, t
+    move.l  \r, \t
+    lsl.l   #3, \t              /* 8 r */
+    lsl.l   #8, \r
+    lsl.l   #2, \r              /* 1024 r */
+    sub.l   \t, \r
+    add.l   \t, \t
+    sub.l   \t, \r              /* 1000 r */
+    swap    \r
+    ext.l   \r                  /* >> 16 */
+.endm
+
+    .section .text.__servo_board_pass, "ax"
+    .globl __servo_board_pass
+__servo_board_pass:
+    movem.l %d2-%d4/%a2-%a3, -(%sp) /* arguments now at 24, 28 */
+    movea.l 24(%sp), %a2        /* b */
+    movea.l 28(%sp), %a3        /* p */
+    subq.l  #6, %sp             /* servo::Input's head: enc[2], timer */
+    movea.l P_LATCH(%a3), %a0
+    move.w  #ENC_LATCH, (%a0)
+    movea.l P_ENC0(%a3), %a0
+    move.w  (%a0), (%sp)
+    movea.l P_ENC1(%a3), %a0
+    move.w  (%a0), 2(%sp)
+    movea.l P_TIMER(%a3), %a0
+    move.w  (%a0), 4(%sp)
+    /* the subgoal record, one try: whole when both sequences are the same, even, not 0 */
+    movea.l P_SUB(%a3), %a0
+    move.l  (%a0)+, %d0         /* sequence */
+    move.l  (%a0)+, %d1         /* goal 1 */
+    move.l  (%a0)+, %d2         /* goal 2 */
+    addq.l  #4, %a0             /* (flags) */
+    move.l  (%a0), %d3          /* cycle */
+    movea.l P_SUB(%a3), %a0
+    move.l  (%a0), %d4
+    cmp.l   %d0, %d4
+    bne     .Lbp_rust
+    btst    #0, %d0
+    bne     .Lbp_rust
+    tst.l   %d0
+    beq     .Lbp_rust
+    move.l  %d1, B_LAST_SUB(%a2)
+    move.l  %d2, B_LAST_SUB+4(%a2)
+    move.l  %d3, B_LAST_SUB+8(%a2)
+    move.b  #1, B_HAS_SUB(%a2)
+    clr.b   B_TORN(%a2)
+    /* the servo's pass into b->out */
+    pea     B_OUT(%a2)
+    pea     B_LAST_SUB(%a2)
+    pea     8(%sp)              /* the Input head, below the two pushed */
+    pea     B_SERVO(%a2)
+    jsr     __servo_pass
+    lea     16(%sp), %sp
+    tst.l   %d0
+    beq     .Lbp_rust
+    /* the DACs (codes within DAC_MIN..DAC_MAX: 12 bits) and both amplifiers enabled */
+    move.w  B_OUT+F_DAC(%a2), %d0
+    andi.w  #0xfff, %d0
+    movea.l P_DAC0(%a3), %a0
+    move.w  %d0, (%a0)
+    move.w  B_OUT+F_DAC+2(%a2), %d0
+    andi.w  #0xfff, %d0
+    movea.l P_DAC1(%a3), %a0
+    move.w  %d0, (%a0)
+    movea.l P_AMP(%a3), %a0
+    move.w  #AMP_BOTH, (%a0)
+    /* the state, built on the stack: ten words */
+    lea     -40(%sp), %sp
+    movea.l %sp, %a1
+    lea     B_OUT+F_THETA(%a2), %a0 /* theta, omega, arrest: six words in a row */
+    .rept 6
+    move.l  (%a0)+, %d0
+    Q16_TO_URAD %d0, %d1, %d2
+    move.l  %d0, (%a1)+
+    .endr
+    move.l  (%a0)+, %d0         /* the torques */
+    MNM     %d0, %d1
+    move.l  %d0, (%a1)+
+    move.l  (%a0), %d0
+    MNM     %d0, %d1
+    move.l  %d0, (%a1)+
+    /* ticks += period (u64); t_us = ticks >> 1 (low 32 bits); loops += 1 */
+    moveq   #0, %d0
+    move.w  B_OUT+F_TICKS(%a2), %d0
+    move.l  B_TICKS(%a2), %d1
+    move.l  B_TICKS+4(%a2), %d2
+    add.l   %d0, %d2
+    moveq   #0, %d0
+    addx.l  %d0, %d1
+    move.l  %d1, B_TICKS(%a2)
+    move.l  %d2, B_TICKS+4(%a2)
+    lsr.l   #1, %d1             /* X = the high word's low bit */
+    roxr.l  #1, %d2
+    move.l  %d2, (%a1)+
+    move.l  B_LOOPS(%a2), %d0
+    addq.l  #1, %d0
+    move.l  %d0, B_LOOPS(%a2)
+    move.l  %d0, (%a1)
+    /* publish: sequence odd ((seq | 1) + 2 when a writer died mid-write), the words, even */
+    movea.l P_STATE(%a3), %a0
+    move.l  (%a0), %d0
+    moveq   #1, %d1
+    and.l   %d0, %d1
+    add.l   %d1, %d1
+    bset    #0, %d0
+    add.l   %d1, %d0
+    move.l  %d0, (%a0)+
+    movea.l %sp, %a1
+    .rept 10
+    move.l  (%a1)+, (%a0)+
+    .endr
+    addq.l  #1, %d0
+    movea.l P_STATE(%a3), %a0
+    move.l  %d0, (%a0)
+    lea     46(%sp), %sp
+    moveq   #1, %d0
+    movem.l (%sp)+, %d2-%d4/%a2-%a3
+    rts
+.Lbp_rust:
+    addq.l  #6, %sp
+    moveq   #0, %d0
+    movem.l (%sp)+, %d2-%d4/%a2-%a3
     rts

@@ -617,7 +617,11 @@ pub mod layout {
     #[cfg(target_arch = "m68k")]
     const _: () = {
         use super::arrest_log::{ArrestLog, PASSES};
-        use super::Servo;
+        use super::{Input, Servo, Subgoal};
+        assert!(offset_of!(Input, enc) == 0 && offset_of!(Input, timer) == 4);
+        assert!(offset_of!(Subgoal, goal_urad) == 0 && offset_of!(Subgoal, cycle) == 8);
+        assert!(size_of::<Subgoal>() == 12);
+        assert!(offset_of!(Servo, started) == 0);
         assert!(offset_of!(Servo, last_enc) == 2);
         assert!(offset_of!(Servo, counts) == 6);
         assert!(offset_of!(Servo, last_timer) == 14);
@@ -628,7 +632,9 @@ pub mod layout {
         assert!(offset_of!(Servo, has_cycle) == 144);
         assert!(offset_of!(Servo, since_cycle_q32) == 146);
         assert!(offset_of!(Servo, since_start_q32) == 150);
-        assert!(offset_of!(Servo, log) == 166);
+        assert!(offset_of!(Servo, has_hold_goal) == 162);
+        assert!(offset_of!(Servo, hold) == 163);
+        assert!(offset_of!(Servo, log) == 164);
         assert!(ArrestLog::N_OFFSET == 0 && ArrestLog::KEPT_OFFSET == 4);
         assert!(ArrestLog::T_OFFSET == 8 && ArrestLog::ARREST_OFFSET == 8 + 4 * PASSES);
         assert!(PASSES == 128);
@@ -713,8 +719,10 @@ pub mod layout {
     }
 }
 
-/// What the board read this pass.
+/// What the board read this pass. `repr(C)`: the image's `__servo_pass` reads the
+/// encoder latches and the timer at its head.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Input {
     /// Latched 16-bit encoder counts of both motors.
     pub enc: [u16; 2],
@@ -724,8 +732,10 @@ pub struct Input {
     pub subgoal: Option<Subgoal>,
 }
 
-/// A subgoal as published by the reflex board.
+/// A subgoal as published by the reflex board. `repr(C)`: the servo image's board pass
+/// (`__servo_board_pass`) reads a record into one and hands it to `__servo_pass`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Subgoal {
     /// Goal angles, micro-radians (absolute).
     pub goal_urad: [i32; 2],
@@ -848,7 +858,10 @@ pub struct Servo {
     has_cycle: bool,
     since_cycle_q32: i32,
     since_start_q32: i32,
-    hold_goal_q16: Option<[i32; 2]>,
+    /// The goal of a hold, once chosen (meaningful while `has_hold_goal`). (Two plain
+    /// fields, not an `Option<[i32; 2]>`: the image's `__servo_pass` tests the flag.)
+    hold_goal_q16: [i32; 2],
+    has_hold_goal: bool,
     hold: Option<Hold>,
     /// The arrest points of the last passes: a hold for a subgoal that stopped coming holds
     /// at the arrest point of the moment it stopped.
@@ -882,7 +895,8 @@ impl Servo {
             has_cycle: false,
             since_cycle_q32: 0,
             since_start_q32: 0,
-            hold_goal_q16: None,
+            hold_goal_q16: [0; 2],
+            has_hold_goal: false,
             hold: None,
             log: arrest_log::ArrestLog::new(),
         }
@@ -984,34 +998,29 @@ impl Servo {
     }
 
     /// The image's common pass in one call of `__servo_pass` (`crates/rt/asm/servo.S`): a
-    /// subgoal read whole, no hold, the proximate law on both links. The routine checks the
-    /// subgoal's range and age before it changes anything and returns 0 if the pass is not
-    /// the common one (out of range or stale); the Rust of [`Servo::step`] then runs it.
-    /// Does what the Rust does, bit for bit (`the_servo_image_steps_like_the_host`): the
-    /// counts, the period, the observers, the arrest log, the goal and the law.
+    /// subgoal read whole, no hold, the proximate law on both links. Before it changes
+    /// anything the routine checks that (started, no hold or hold goal, both links
+    /// proximate) and the subgoal's range and age, and returns 0 if the pass is not the
+    /// common one; the Rust of [`Servo::step`] then runs it. Does what the Rust does, bit
+    /// for bit (`the_servo_image_steps_like_the_host`): the counts, the period, the
+    /// observers, the arrest log, the goal and the law.
     #[cfg(target_arch = "m68k")]
     #[inline(always)]
     fn pass_in_asm(&mut self, input: &Input, out: *mut Output) -> bool {
         extern "C" {
-            fn __servo_pass(s: *mut u8, io: *const u16, sub: *const i32, out: *mut u8) -> u32;
+            fn __servo_pass(s: *mut u8, io: *const u16, sub: *const Subgoal, out: *mut u8) -> u32;
         }
-        let Some(sub) = input.subgoal else {
+        let Some(sub) = &input.subgoal else {
             return false;
         };
-        if self.hold.is_some()
-            || self.hold_goal_q16.is_some()
-            || !(self.links[0].proximate && self.links[1].proximate)
-        {
-            return false;
-        }
-        let io = [input.enc[0], input.enc[1], input.timer];
-        let sw = [sub.goal_urad[0], sub.goal_urad[1], sub.cycle as i32];
-        // SAFETY: the routine reads the three I/O halfwords and three subgoal words, reads
-        // and updates `self` at the offsets `layout` asserts, and writes every field of
-        // `out` when it returns 1 (and nothing of `self` or `out` when it returns 0).
+        // SAFETY: the routine reads the three I/O halfwords at the head of `Input`
+        // (`repr(C)`) and the subgoal, reads and updates `self` at the offsets `layout`
+        // asserts, and writes every field of `out` when it returns 1 (and nothing of `self`
+        // or `out` when it returns 0).
         unsafe {
             let me = (self as *mut Self).cast();
-            __servo_pass(me, io.as_ptr(), sw.as_ptr(), out.cast()) != 0
+            let io = (input as *const Input).cast();
+            __servo_pass(me, io, sub, out.cast()) != 0
         }
     }
 
@@ -1190,25 +1199,26 @@ impl Servo {
         match verdict {
             Ok(g) => {
                 self.hold = None;
-                self.hold_goal_q16 = None;
+                self.has_hold_goal = false;
                 (g, None)
             }
             Err(why) => {
                 // Subgoals that stopped coming (stale, or torn since): the arrest point of
                 // the last fresh one. A bad subgoal: the arrest point now.
-                if self.hold_goal_q16.is_none() {
+                if !self.has_hold_goal {
                     // (No look-up for the others: it costs ~44,000 cycles, which the first
                     // pass, waiting for a first subgoal, would add to the start-up.)
-                    self.hold_goal_q16 = Some(match why {
+                    self.hold_goal_q16 = match why {
                         Hold::Stale | Hold::Torn => self.log.at_age(
                             self.log.newest_t(),
                             (self.since_cycle_q32 >> 8) as u32,
                             arrest,
                         ),
                         _ => arrest,
-                    });
+                    };
+                    self.has_hold_goal = true;
                 }
-                let goal = self.hold_goal_q16.unwrap_or(arrest);
+                let goal = self.hold_goal_q16;
                 // A fault is new when the reason changes; waiting for a first subgoal is none.
                 // (Written as a match: the boolean form compiled to CMP + SUBX, which reads a
                 // stale X flag on the 68k; docs/toolchain.md.)
