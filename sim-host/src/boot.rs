@@ -246,14 +246,21 @@ pub struct Profile {
 /// emulated time one instruction at a time, charging each instruction's cycles to the
 /// function (nearest symbol at or below the PC) it belongs to.
 ///
-/// The servo board gets what it gets in the running system: a reflex subgoal (the arm's
-/// resting angles, 0 and 0) published every 0.25 ms with a new cycle, from power-up on
-/// (without it every pass is a hold waiting for a first subgoal).
+/// The servo board gets what it gets in the running system: a reflex subgoal
+/// (`servo_goal_urad`; the arm's resting angles, 0 and 0, keep it at rest) published every
+/// 0.25 ms with a new cycle, from power-up on (without it every pass is a hold waiting for a
+/// first subgoal).
 ///
 /// `resting` (the sensing board): the host also publishes a servo state every 0.25 ms with
 /// the arm resting, its tip at the tip's lit beacon (`sensing_bench::RestingServo`), from
 /// power-up on: the board learns the drift from the tip and corrects every beacon.
-pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Profile, ImageError> {
+pub fn profile(
+    dir: &Path,
+    board: BoardId,
+    ms: f64,
+    resting: bool,
+    servo_goal_urad: [i32; 2],
+) -> Result<Profile, ImageError> {
     let image = Image::load(&dir.join(format!("{}.elf", image_name(board))))?;
     let mut per = FunctionCycles::new(&image);
     let mut sys = System::power_up(dir, &[board])?;
@@ -301,8 +308,8 @@ pub fn profile(dir: &Path, board: BoardId, ms: f64, resting: bool) -> Result<Pro
         }
         if servo {
             let rec = vme_map::records::ReflexSubgoal {
-                goal1_urad: 0,
-                goal2_urad: 0,
+                goal1_urad: servo_goal_urad[0],
+                goal2_urad: servo_goal_urad[1],
                 flags: 0,
                 cycle: k + 1,
             };

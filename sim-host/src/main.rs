@@ -173,6 +173,12 @@ enum Cmd {
         /// read beside `m68k-linux-gnu-objdump -d` of the image.
         #[arg(long, default_value_t = 0)]
         addresses: usize,
+        /// The servo board: the reflex subgoal the host publishes, link 1 and link 2 in
+        /// urad. The standalone board's encoders stay at 0, so a goal away from 0 keeps the
+        /// law on its braking curve (a square root a link a pass): the moving arm's pass.
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true,
+              default_values_t = [0, 0])]
+        servo_goal_urad: Vec<i32>,
     },
     /// Build the C-space image database from the arm's outline and check it against the
     /// committed `crates/cspace/src/tables.rs` (or rewrite that file with `--write`).
@@ -458,6 +464,7 @@ fn main() -> ExitCode {
             top,
             resting,
             addresses,
+            servo_goal_urad,
         } => {
             let Some(id) = parse_board(&board) else {
                 eprintln!("sim-host: unknown board {board:?} ({BOARD_NAMES})");
@@ -467,8 +474,17 @@ fn main() -> ExitCode {
                 eprintln!("sim-host: --resting is for the sensing board");
                 return ExitCode::from(2);
             }
+            let &[g1, g2] = servo_goal_urad.as_slice() else {
+                eprintln!("sim-host: --servo-goal-urad takes two angles, LINK1,LINK2");
+                return ExitCode::from(2);
+            };
+            let goal = [g1, g2];
+            if goal != [0, 0] && id != BoardId::Servo {
+                eprintln!("sim-host: --servo-goal-urad is for the servo board");
+                return ExitCode::from(2);
+            }
             let dir = images.unwrap_or_else(default_images_dir);
-            match sim_host::boot::profile(&dir, id, ms, resting) {
+            match sim_host::boot::profile(&dir, id, ms, resting, goal) {
                 Ok(p) => {
                     let per = p.cycles as f64 / p.loops.max(1) as f64;
                     println!(

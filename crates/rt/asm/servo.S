@@ -600,7 +600,9 @@ servo_control_body:
     .equ SV_SINCE_START, 150
     .equ SV_HAS_HOLD_GOAL, 162
     .equ SV_HOLD, 163
-    .equ SV_LOG, 164
+    .equ SV_MEMO_URAD, 164
+    .equ SV_MEMO_Q16, 172
+    .equ SV_LOG, 180
     /* LinkConst::proximate */
     .equ K_PROXIMATE, 128
     /* ArrestLog */
@@ -637,6 +639,14 @@ __servo_pass:
     movea.l 52(%sp), %a0        /* io */
     movea.l 56(%sp), %a1        /* sub */
     movea.l 60(%sp), %a4        /* out */
+    bsr     servo_pass_body
+    movem.l (%sp)+, %d2-%d7/%a2-%a6
+    rts
+
+/* The routine's body, for it and __servo_board_pass: a6 = s, a0 = io, a1 = sub, a4 = out;
+ * d0 = the result; d1-d7, a0-a6 clobbered (a6 kept). */
+servo_pass_body:
+    movem.l %a1/%a4, -(%sp)     /* sub at 0(sp), out at 4(sp) */
     /* the common pass only: started, no hold nor hold goal, both links proximate */
     tst.b   (%a6)               /* started */
     beq     .Lpass_rust
@@ -752,14 +762,24 @@ __servo_pass:
     addq.l  #1, %d0
     sub.l   %d1, %d0
     move.l  %d0, LOG_KEPT(%a0)
-    /* the goal: urad_to_q16 of both (mul_shr(g, URAD_TO_Q16_Q32, 32)) */
-    movea.l 56(%sp), %a1
+    /* the goal: urad_to_q16 of both (mul_shr(g, URAD_TO_Q16_Q32, 32)), converted again
+     * only when they changed (servo::Servo::goal_q16's memo) */
+    movea.l (%sp), %a1
     move.l  (%a1), %d0
+    move.l  4(%a1), %d2
+    cmp.l   SV_MEMO_URAD(%a6), %d0
+    bne.s   7f
+    cmp.l   SV_MEMO_URAD+4(%a6), %d2
+    beq.s   8f
+7:  move.l  %d0, SV_MEMO_URAD(%a6)
+    move.l  %d2, SV_MEMO_URAD+4(%a6)
     MULSHR  %d0, #URAD_TO_Q16_Q32, 32, %d1, %d7, %d7
-    move.l  %d0, F_GOAL(%a4)
-    move.l  4(%a1), %d0
+    move.l  %d0, SV_MEMO_Q16(%a6)
+    move.l  %d2, %d0
     MULSHR  %d0, #URAD_TO_Q16_Q32, 32, %d1, %d7, %d7
-    move.l  %d0, F_GOAL+4(%a4)
+    move.l  %d0, SV_MEMO_Q16+4(%a6)
+8:  move.l  SV_MEMO_Q16(%a6), F_GOAL(%a4)
+    move.l  SV_MEMO_Q16+4(%a6), F_GOAL+4(%a4)
     /* the observers' settling clock: settled once it reached SETTLE, else it counts
      * min(dt, MAX_DT) (wrapping, as the release build's +=) */
     suba.l  %a3, %a3            /* a3 = settled (0) */
@@ -779,12 +799,12 @@ __servo_pass:
     movea.l %a3, %a4
     movea.l SV_LINKS(%a6), %a2
     lea     SV_LAW(%a6), %a3
-    movea.l 60(%sp), %a0
+    movea.l 4(%sp), %a0
     move.l  F_THETA(%a0), %d2
     sub.l   F_GOAL(%a0), %d2
     move.l  F_OMEGA(%a0), %d3
     bsr     servo_control_body
-    movea.l 60(%sp), %a0
+    movea.l 4(%sp), %a0
     move.w  %d0, F_DAC(%a0)
     swap    %d0
     move.b  %d0, F_REGIME(%a0)
@@ -795,17 +815,17 @@ __servo_pass:
     sub.l   F_GOAL+4(%a0), %d2
     move.l  F_OMEGA+4(%a0), %d3
     bsr     servo_control_body
-    movea.l 60(%sp), %a0
+    movea.l 4(%sp), %a0
     move.w  %d0, F_DAC+2(%a0)
     swap    %d0
     move.b  %d0, F_REGIME+1(%a0)
     move.l  S_TORQUE(%a3), F_TORQUE+4(%a0)
     moveq   #1, %d0
-    movem.l (%sp)+, %d2-%d7/%a2-%a6
+    addq.l  #8, %sp
     rts
 .Lpass_rust:
     moveq   #0, %d0
-    movem.l (%sp)+, %d2-%d7/%a2-%a6
+    addq.l  #8, %sp
     rts
 
 /* ---- the board's common pass ----
@@ -885,10 +905,10 @@ __servo_pass:
     .section .text.__servo_board_pass, "ax"
     .globl __servo_board_pass
 __servo_board_pass:
-    movem.l %d2-%d4/%a2-%a3, -(%sp) /* arguments now at 24, 28 */
-    movea.l 24(%sp), %a2        /* b */
-    movea.l 28(%sp), %a3        /* p */
-    subq.l  #6, %sp             /* servo::Input's head: enc[2], timer */
+    movem.l %d2-%d7/%a2-%a6, -(%sp) /* arguments now at 48, 52 */
+    movea.l 48(%sp), %a2        /* b */
+    movea.l 52(%sp), %a3        /* p */
+    subq.l  #6, %sp             /* servo::Input's head: enc[2], timer; arguments at 54, 58 */
     movea.l P_LATCH(%a3), %a0
     move.w  #ENC_LATCH, (%a0)
     movea.l P_ENC0(%a3), %a0
@@ -917,15 +937,16 @@ __servo_board_pass:
     move.l  %d3, B_LAST_SUB+8(%a2)
     move.b  #1, B_HAS_SUB(%a2)
     clr.b   B_TORN(%a2)
-    /* the servo's pass into b->out */
-    pea     B_OUT(%a2)
-    pea     B_LAST_SUB(%a2)
-    pea     8(%sp)              /* the Input head, below the two pushed */
-    pea     B_SERVO(%a2)
-    jsr     __servo_pass
-    lea     16(%sp), %sp
+    /* the servo's pass into b->out: __servo_pass's body */
+    lea     B_SERVO(%a2), %a6
+    movea.l %sp, %a0
+    lea     B_LAST_SUB(%a2), %a1
+    lea     B_OUT(%a2), %a4
+    jsr     servo_pass_body
     tst.l   %d0
     beq     .Lbp_rust
+    movea.l 54(%sp), %a2
+    movea.l 58(%sp), %a3
     /* the DACs (codes within DAC_MIN..DAC_MAX: 12 bits) and both amplifiers enabled */
     move.w  B_OUT+F_DAC(%a2), %d0
     andi.w  #0xfff, %d0
@@ -987,10 +1008,10 @@ __servo_board_pass:
     move.l  %d0, (%a0)
     lea     46(%sp), %sp
     moveq   #1, %d0
-    movem.l (%sp)+, %d2-%d4/%a2-%a3
+    movem.l (%sp)+, %d2-%d7/%a2-%a6
     rts
 .Lbp_rust:
     addq.l  #6, %sp
     moveq   #0, %d0
-    movem.l (%sp)+, %d2-%d4/%a2-%a3
+    movem.l (%sp)+, %d2-%d7/%a2-%a6
     rts

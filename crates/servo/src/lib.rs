@@ -634,7 +634,9 @@ pub mod layout {
         assert!(offset_of!(Servo, since_start_q32) == 150);
         assert!(offset_of!(Servo, has_hold_goal) == 162);
         assert!(offset_of!(Servo, hold) == 163);
-        assert!(offset_of!(Servo, log) == 164);
+        assert!(offset_of!(Servo, goal_memo_urad) == 164);
+        assert!(offset_of!(Servo, goal_memo_q16) == 172);
+        assert!(offset_of!(Servo, log) == 180);
         assert!(ArrestLog::N_OFFSET == 0 && ArrestLog::KEPT_OFFSET == 4);
         assert!(ArrestLog::T_OFFSET == 8 && ArrestLog::ARREST_OFFSET == 8 + 4 * PASSES);
         assert!(PASSES == 128);
@@ -863,6 +865,9 @@ pub struct Servo {
     hold_goal_q16: [i32; 2],
     has_hold_goal: bool,
     hold: Option<Hold>,
+    /// The last subgoal converted ([`Servo::goal_q16`]): its angles in urad and in Q16.
+    goal_memo_urad: [i32; 2],
+    goal_memo_q16: [i32; 2],
     /// The arrest points of the last passes: a hold for a subgoal that stopped coming holds
     /// at the arrest point of the moment it stopped.
     log: arrest_log::ArrestLog,
@@ -898,6 +903,8 @@ impl Servo {
             hold_goal_q16: [0; 2],
             has_hold_goal: false,
             hold: None,
+            goal_memo_urad: [0; 2],
+            goal_memo_q16: [0; 2],
             log: arrest_log::ArrestLog::new(),
         }
     }
@@ -1152,6 +1159,18 @@ impl Servo {
         self.choose_goal(sub, dt_q32, arrest, first)
     }
 
+    /// A subgoal's angles in Q16 ([`urad_to_q16`]), converted again only when they changed:
+    /// at rest the reflex republishes the same goal every cycle, and the two conversions
+    /// (`MULS.L` each) are ~130 of the image's cycles a pass. The image's `__servo_pass`
+    /// keeps the same memo.
+    fn goal_q16(&mut self, urad: [i32; 2]) -> [i32; 2] {
+        if urad != self.goal_memo_urad {
+            self.goal_memo_urad = urad;
+            self.goal_memo_q16 = [urad_to_q16(urad[0]), urad_to_q16(urad[1])];
+        }
+        self.goal_memo_q16
+    }
+
     /// Accounts for the time since start-up; true once the observers count as locked.
     #[inline(never)]
     fn observers_settled(&mut self, dt_q32: i32) -> bool {
@@ -1192,7 +1211,7 @@ impl Servo {
                 } else if self.since_cycle_q32 > STALE_Q32 {
                     Err(Hold::Stale)
                 } else {
-                    Ok([urad_to_q16(s.goal_urad[0]), urad_to_q16(s.goal_urad[1])])
+                    Ok(self.goal_q16(s.goal_urad))
                 }
             }
         };
