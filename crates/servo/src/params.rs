@@ -351,16 +351,18 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
     ]
 }
 
-/// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: a
-/// pass of the image takes 9,000-11,000 cycles of the 11,133 a 1,500 Hz period has at
-/// 16.7 MHz (`sim-host profile servo`, and `loop_max_us` of an image run; docs/servo.md).
-pub const IMAGE_HZ: f64 = 1500.0;
+/// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its
+/// common pass takes 6,219 cycles at rest and 7,292 on the braking curve (a square root a
+/// link) of the 8,350 a 2,000 Hz period has at 16.7 MHz (`sim-host profile servo`,
+/// `--servo-goal-urad`; docs/servo.md). 3 kHz leaves 5,566.
+pub const IMAGE_HZ: f64 = 2000.0;
 
 /// Near-goal frequencies of the tuned law at [`IMAGE_HZ`], Hz (critically damped): from the
-/// bench's step set at 1,500 Hz, the stiffest below [`TUNED_NEAR_HZ`] with every step
-/// settling (softer ones leave link 2 held by friction counts off its goal); with
-/// [`TUNED_NEAR_HZ`] itself, fig. VI.5's image run ran into the reflex's escapes and ended in
-/// the goal's other pose (docs/servo.md).
+/// bench's step set at 1,500 Hz (the image's rate until the board's pass was hand-written;
+/// kept at 2,000 Hz), the stiffest below [`TUNED_NEAR_HZ`] with every step settling (softer
+/// ones leave link 2 held by friction counts off its goal); with [`TUNED_NEAR_HZ`] itself,
+/// fig. VI.5's image run ran into the reflex's escapes and ended in the goal's other pose
+/// (docs/servo.md).
 pub const IMAGE_NEAR_HZ: [f64; 2] = [40.0, 17.0];
 
 /// The tuned law with the observer gains, notch and near-goal loop designed for
