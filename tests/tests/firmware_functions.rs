@@ -290,6 +290,53 @@ fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
     }
 }
 
+/// The servo probes' scripted move, pass `i`: both encoders following a smoothstep toward a
+/// link-1 move of 3 rad and a link-2 move of -1 rad over 300 passes (in counts: 32768 and
+/// 8192 a turn), the timer advanced by `period` ticks with up to 7 of jitter from the
+/// generator `s` (and by 25,000 more, over the 10 ms limit, at pass 400), and the link-1 goal
+/// in urad (3 rad; out of range at passes 320-324). Returns the encoders, the timer and that
+/// goal as probe input words.
+fn servo_script(i: u32, period: u32, t: &mut u32, s: &mut u32) -> [u32; 4] {
+    *s = s.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+    *t = t.wrapping_add(period + (*s >> 29) + if i == 400 { 25_000 } else { 0 });
+    let x = (i as f64 / 300.0).min(1.0);
+    let p = x * x * (3.0 - 2.0 * x);
+    let c1 = (p * 3.0 / std::f64::consts::TAU * 32768.0) as i32;
+    let c2 = (-p / std::f64::consts::TAU * 8192.0) as i32;
+    let goal1: i32 = if (320..325).contains(&i) {
+        30_000_000
+    } else {
+        3_000_000
+    };
+    [
+        c1 as u16 as u32,
+        c2 as u16 as u32,
+        *t & 0xFFFF,
+        goal1 as u32,
+    ]
+}
+
+/// Writes `inputs` big-endian at [`BUF`] in the board's RAM, runs the probe `f(inputs, n,
+/// out)` with `out` right after them, checks that it returns 0 and returns `out`.
+fn run_probe(b: &mut EmuBoard, g: &mut [u8], f: u32, inputs: &[u32], n: u32) -> u32 {
+    let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
+    for (k, w) in inputs.iter().enumerate() {
+        let a = (inp + 4 * k as u32) as usize;
+        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    }
+    let (ret, _) = b
+        .call(g, f, &[inp, n, out], 1_000_000_000)
+        .expect("the probe returns");
+    assert_eq!(ret, 0);
+    out
+}
+
+/// The big-endian word at `addr` of the board's RAM.
+fn ram_word(b: &EmuBoard, addr: u32) -> u32 {
+    let a = addr as usize;
+    u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+}
+
 /// Private I/O registers as plain halfwords, as the servo image's board probe keeps them.
 struct RamIo([u16; 32]);
 
@@ -319,13 +366,8 @@ fn the_servo_board_image_passes_like_the_host() {
     let mut inputs = Vec::new();
     let (mut t, mut s) = (0u32, 0x0bad_cafeu32);
     for i in 0..n {
-        s = s.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-        // ~1,500 passes a second with jitter, and one period over the 10 ms limit.
-        t = t.wrapping_add(1333 + (s >> 29) + if i == 400 { 25_000 } else { 0 });
-        let x = (i as f64 / 300.0).min(1.0);
-        let p = x * x * (3.0 - 2.0 * x);
-        let c1 = (p * 3.0 / std::f64::consts::TAU * 32768.0) as i32;
-        let c2 = (-p / std::f64::consts::TAU * 8192.0) as i32;
+        // ~1,500 passes a second.
+        let [c1, c2, timer, goal1] = servo_script(i, 1333, &mut t, &mut s);
         let cycle = match i {
             100..=199 => i / 3,
             250..=289 => 250,
@@ -337,30 +379,10 @@ fn the_servo_board_image_passes_like_the_host() {
             340..=344 | 360..=375 => 1,
             _ => 0,
         };
-        let goal1: i32 = if (320..325).contains(&i) {
-            30_000_000
-        } else {
-            3_000_000
-        };
-        inputs.extend_from_slice(&[
-            c1 as u16 as u32,
-            c2 as u16 as u32,
-            t & 0xFFFF,
-            goal1 as u32,
-            (-1_000_000i32) as u32,
-            cycle,
-            mode,
-        ]);
+        let goal2 = (-1_000_000i32) as u32;
+        inputs.extend_from_slice(&[c1, c2, timer, goal1, goal2, cycle, mode]);
     }
-    let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
-    for (k, w) in inputs.iter().enumerate() {
-        let a = (inp + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
-    }
-    let (ret, _) = b
-        .call(&mut g, f, &[inp, n, out], 1_000_000_000)
-        .expect("the probe returns");
-    assert_eq!(ret, 0);
+    let out = run_probe(&mut b, &mut g, f, &inputs, n);
     let mut mem = vec![0u8; GLOBAL_RAM_SIZE as usize];
     let mut gb = ArrayBus::new(&mut mem);
     let mut io = RamIo([0; 32]);
@@ -393,10 +415,7 @@ fn the_servo_board_image_passes_like_the_host() {
             hb,
         ]);
         let got: Vec<u32> = (0..15)
-            .map(|k| {
-                let a = (out + 4 * (15 * i + k) as u32) as usize;
-                u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-            })
+            .map(|k| ram_word(&b, out + 4 * (15 * i + k) as u32))
             .collect();
         assert_eq!(got, want, "pass {i}");
         driving += (want[11] != 0 && want[12] != 0) as u32;
@@ -423,14 +442,8 @@ fn the_servo_image_steps_like_the_host() {
     let mut cycles = Vec::new();
     let (mut t, mut s) = (0u32, 0x1234_5678u32);
     for i in 0..n {
-        s = s.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-        // ~750 passes a second with jitter, and one period over the 10 ms limit.
-        t = t.wrapping_add(2667 + (s >> 29) + if i == 400 { 25_000 } else { 0 });
-        // Smoothstep toward the goals over 300 passes, in counts (32768 and 8192 per rev).
-        let x = (i as f64 / 300.0).min(1.0);
-        let p = x * x * (3.0 - 2.0 * x);
-        let c1 = (p * 3.0 / std::f64::consts::TAU * 32768.0) as i32;
-        let c2 = (-p / std::f64::consts::TAU * 8192.0) as i32;
+        // ~750 passes a second.
+        let [c1, c2, timer, goal1] = servo_script(i, 2667, &mut t, &mut s);
         // The subgoal: none at start-up and torn for a while (u32::MAX), its cycle kept
         // for three passes (fresh, the same cycle again) and for 30 (1.33 ms passes: stale
         // after 15), out of range for a few passes.
@@ -440,30 +453,11 @@ fn the_servo_image_steps_like_the_host() {
             250..=279 => 250,
             _ => i,
         };
-        let goal1 = if (320..325).contains(&i) {
-            30_000_000
-        } else {
-            3_000_000
-        };
         cycles.push(cycle);
-        inputs.extend_from_slice(&[
-            c1 as u16 as u32,
-            c2 as u16 as u32,
-            t & 0xFFFF,
-            goal1 as u32,
-            (-1_000_000i32) as u32,
-            cycle,
-        ]);
+        let goal2 = (-1_000_000i32) as u32;
+        inputs.extend_from_slice(&[c1, c2, timer, goal1, goal2, cycle]);
     }
-    let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
-    for (k, w) in inputs.iter().enumerate() {
-        let a = (inp + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
-    }
-    let (ret, _) = b
-        .call(&mut g, f, &[inp, n, out], 500_000_000)
-        .expect("the probe returns");
-    assert_eq!(ret, 0);
+    let out = run_probe(&mut b, &mut g, f, &inputs, n);
     let mut host = servo::Servo::with_links(&servo::params::TUNED_AT_IMAGE_HZ);
     let (mut driving, mut faults) = (0, Vec::new());
     for i in 0..n as usize {
@@ -477,10 +471,7 @@ fn the_servo_image_steps_like_the_host() {
             }),
         });
         let got: Vec<i32> = (0..WORDS)
-            .map(|k| {
-                let a = (out + 4 * (WORDS * i + k) as u32) as usize;
-                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-            })
+            .map(|k| ram_word(&b, out + 4 * (WORDS * i + k) as u32) as i32)
             .collect();
         let want = o.probe_words().to_vec();
         assert_eq!(got, want, "pass {i}");
