@@ -190,6 +190,109 @@ __fx_mul_shr\sh:
     MULSHR_FN 28
     MULSHR_FN 32
 
+/* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
+ * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
+ * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
+ * 32 bits (BFFFO finds the leading zeros) to n, the integer root of n is taken and shifted
+ * left by (16 - s) / 2. For n >= 2^30 the root is a seed from n's top byte and one Newton
+ * step with DIVU.L, r1 = (r0 + n / r0) / 2, which lies in [floor(sqrt(n)), floor(sqrt(n)) + 1]
+ * for every such n (checked exhaustively on the host for the table below; r1 reaches 65536
+ * only where the floor is 65535), then one MULU.W to take the floor; for smaller n digit by
+ * digit, 16 rounds of compare, subtract and shift. Bit-identical to host_sqrt_q16 in
+ * crates/servo/src/fx.rs. */
+.macro SQRT_Q16 x, r, t, u, s, a
+    tst.l   \x
+    ble     .Lqz\@
+    bfffo   \x{#0:#32}, \s      /* leading zeros, 0..31 */
+    andi.l  #30, \s             /* even */
+    cmpi.l  #16, \s
+    bls.s   .Lq1\@
+    moveq   #16, \s
+.Lq1\@:
+    lsl.l   \s, \x              /* n = x << s */
+    cmpi.l  #0x40000000, \x
+    bcs.s   .Lqd\@              /* n < 2^30 (x below 2^14): digit by digit */
+    move.l  \x, \t
+    rol.l   #8, \t
+    andi.l  #255, \t            /* top byte, 64..255 */
+    lea     __fx_sqrt_seed-128, \a
+    moveq   #0, \r
+    move.w  (\a,\t\().l*2), \r  /* r0 = sqrt((byte + 1/2) 2^24), rounded */
+    move.l  \x, \t
+    divu.l  \r, \t              /* n / r0 */
+    add.l   \r, \t
+    lsr.l   #1, \t              /* r1 = (r0 + n / r0) / 2 */
+    move.l  \t, \r
+    cmpi.l  #0xffff, \t
+    bhi.s   .Lqm\@
+    mulu.w  \t, \t              /* r1^2, below 2^32 */
+    cmp.l   \x, \t
+    bls.s   .Lqf\@              /* r1^2 <= n: r1 is the floor */
+.Lqm\@:
+    subq.l  #1, \r              /* else r1 - 1 is (65536: 65535) */
+    bra.s   .Lqf\@
+.Lqd\@:
+    moveq   #0, \r              /* r */
+    move.l  #0x40000000, \t     /* bit */
+.Lq2\@:
+    move.l  \r, \u
+    add.l   \t, \u              /* r + bit */
+    cmp.l   \u, \x
+    bcs.s   .Lq3\@              /* n < r + bit (unsigned) */
+    sub.l   \u, \x
+    lsr.l   #1, \r
+    add.l   \t, \r
+    bra.s   .Lq4\@
+.Lq3\@:
+    lsr.l   #1, \r
+.Lq4\@:
+    lsr.l   #2, \t
+    tst.l   \t
+    bne.s   .Lq2\@
+.Lqf\@:
+    moveq   #16, \x
+    sub.l   \s, \x
+    lsr.l   #1, \x              /* (16 - s) / 2 */
+    lsl.l   \x, \r
+    move.l  \r, \x
+    bra.s   .Lqe\@
+.Lqz\@:
+    moveq   #0, \x
+.Lqe\@:
+.endm
+
+/* i32 __fx_sqrt_q16(i32 x): SQRT_Q16 as a function (fx::sqrt_q16 calls it in every image;
+ * the servo's law takes it inline). */
+    .section .text.__fx_sqrt_q16, "ax"
+    .globl __fx_sqrt_q16
+    .globl __fx_sqrt_seed
+__fx_sqrt_q16:
+    movem.l %d2-%d4, -(%sp)     /* argument now at 16 */
+    move.l  16(%sp), %d0
+    SQRT_Q16 %d0, %d1, %d2, %d3, %d4, %a0
+    movem.l (%sp)+, %d2-%d4
+    rts
+/* Seeds of the square root for n's top byte b = 64..255: round(sqrt((b + 1/2) 2^24)). */
+    .even
+__fx_sqrt_seed:
+    .word   32896, 33150, 33402, 33652, 33900, 34147, 34392, 34635, 34876, 35116, 35354, 35590
+    .word   35825, 36059, 36291, 36521, 36750, 36978, 37204, 37429, 37652, 37874, 38095, 38315
+    .word   38533, 38750, 38966, 39181, 39394, 39606, 39818, 40028, 40237, 40445, 40652, 40857
+    .word   41062, 41266, 41469, 41671, 41871, 42071, 42270, 42468, 42665, 42861, 43057, 43251
+    .word   43445, 43637, 43829, 44020, 44210, 44400, 44588, 44776, 44963, 45149, 45334, 45519
+    .word   45703, 45886, 46069, 46250, 46431, 46612, 46791, 46970, 47149, 47326, 47503, 47679
+    .word   47855, 48030, 48204, 48378, 48551, 48723, 48895, 49067, 49237, 49407, 49577, 49746
+    .word   49914, 50082, 50249, 50416, 50582, 50747, 50912, 51077, 51241, 51404, 51567, 51730
+    .word   51892, 52053, 52214, 52374, 52534, 52694, 52853, 53011, 53169, 53327, 53484, 53640
+    .word   53797, 53952, 54108, 54262, 54417, 54571, 54724, 54877, 55030, 55182, 55334, 55485
+    .word   55636, 55787, 55937, 56087, 56236, 56385, 56534, 56682, 56830, 56977, 57124, 57271
+    .word   57417, 57563, 57709, 57854, 57999, 58143, 58287, 58431, 58574, 58717, 58860, 59002
+    .word   59144, 59286, 59427, 59568, 59709, 59849, 59989, 60129, 60268, 60407, 60546, 60684
+    .word   60822, 60960, 61098, 61235, 61372, 61508, 61644, 61780, 61916, 62051, 62186, 62321
+    .word   62456, 62590, 62724, 62857, 62991, 63124, 63256, 63389, 63521, 63653, 63785, 63916
+    .word   64047, 64178, 64309, 64439, 64569, 64699, 64828, 64957, 65086, 65215, 65344, 65472
+
+
 /* CLAMP r, lim, t: r = clamp(r, -lim, lim) for lim >= 0 (any data mode); t scratch. */
 .macro CLAMP r, lim, t
     move.l  \lim, \t
@@ -418,9 +521,7 @@ servo_control_body:
 1:  moveq   #1, %d5             /* sliding */
     move.l  E_TWOA(%a3), %d0
     MULSHR  %d0, %d6, 16, %d1, %d7, %d7
-    move.l  %d0, -(%sp)
-    jsr     __fx_sqrt_q16
-    addq.l  #4, %sp
+    SQRT_Q16 %d0, %d1, %d4, %d6, %d7, %a0
     sub.l   E_C(%a3), %d0       /* v = sqrt(2A d) - c */
     tst.l   %d2
     ble     2f
