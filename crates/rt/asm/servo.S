@@ -1116,3 +1116,45 @@ __servo_board_pass:
     moveq   #0, %d0
     movem.l (%sp)+, %d2-%d7/%a2-%a6
     rts
+
+/* ---- the arrest log's look-up (servo::arrest_log::ArrestLog::at_age) ----
+ * void __servo_at_age(const ArrestLog *log, u32 now, u32 age, const i32 fallback[2],
+ *                     i32 out[2]): out = the arrest point of the newest entry at least age
+ * before now ((now - t) - age >= 0 as an i32, wrapping), else of the oldest kept, else
+ * fallback when nothing is kept. From the newest back, stopping at the first old enough:
+ * ~20 cycles an entry, at most 128 (the compiled branch-free loop took ~27,000 cycles, the
+ * whole of a hold's first pass over again when an input went stale). Offsets: servo::layout
+ * asserts them (LOG_*). */
+    .section .text.__servo_at_age, "ax"
+    .globl __servo_at_age
+__servo_at_age:
+    movem.l %d2-%d4, -(%sp)     /* arguments now at 16, 20, 24, 28, 32 */
+    movea.l 16(%sp), %a0        /* log */
+    movea.l 32(%sp), %a1        /* out */
+    move.l  LOG_KEPT(%a0), %d3
+    bne.s   1f
+    movea.l 28(%sp), %a0        /* nothing kept: the fallback */
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0), (%a1)
+    movem.l (%sp)+, %d2-%d4
+    rts
+1:  move.l  20(%sp), %d1        /* now */
+    move.l  24(%sp), %d2        /* age */
+    move.l  LOG_N(%a0), %d0
+    subq.l  #1, %d0             /* the newest */
+    subq.l  #1, %d3             /* kept - 1 more after the first (DBRA) */
+2:  moveq   #127, %d4
+    and.l   %d0, %d4            /* its index */
+    move.l  %d1, %d0
+    sub.l   LOG_T(%a0,%d4.l*4), %d0
+    sub.l   %d2, %d0
+    bpl.s   3f                  /* (now - t) - age >= 0: old enough */
+    move.l  %d4, %d0
+    subq.l  #1, %d0             /* the next older */
+    dbra    %d3, 2b
+3:  /* d4: the entry found, or the oldest kept */
+    lea     LOG_ARREST(%a0), %a0
+    move.l  (%a0,%d4.l*8), (%a1)+
+    move.l  4(%a0,%d4.l*8), (%a1)
+    movem.l (%sp)+, %d2-%d4
+    rts

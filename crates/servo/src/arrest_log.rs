@@ -59,6 +59,12 @@ impl ArrestLog {
         self.t[(self.n.wrapping_sub(1) as usize) & (PASSES - 1)]
     }
 
+    /// The ring as it lies in memory: the pass count, the entries kept, their times and
+    /// arrest points (for the tests that lay a log out for the image's `__servo_at_age`).
+    pub fn raw(&self) -> (u32, u32, &[u32; PASSES], &[[i32; 2]; PASSES]) {
+        (self.n, self.kept, &self.t, &self.arrest)
+    }
+
     /// Logs a pass's arrest point at time `t`. Not inlined: an array indexed through a
     /// reference in a function of its own (docs/toolchain.md, class 6).
     #[inline(never)]
@@ -73,10 +79,36 @@ impl ArrestLog {
     }
 
     /// The arrest point of the newest pass at least `age` before `now`; the oldest kept if
-    /// none is that old; `fallback` if nothing was logged. A fixed number of iterations and
-    /// sign masks, no data-dependent exit (docs/toolchain.md).
-    #[inline(never)]
+    /// none is that old; `fallback` if nothing was logged. On the 68020 one call of
+    /// `__servo_at_age` (crates/rt/asm/servo.S: from the newest back to the first old
+    /// enough, ~20 cycles an entry; this loop compiled took ~27,000 cycles, a hold's first
+    /// pass over again), bit for bit the same (`the_arrest_log_look_up_matches_the_host`).
     pub fn at_age(&self, now: u32, age: u32, fallback: [i32; 2]) -> [i32; 2] {
+        #[cfg(target_arch = "m68k")]
+        {
+            extern "C" {
+                fn __servo_at_age(
+                    log: *const ArrestLog,
+                    now: u32,
+                    age: u32,
+                    fallback: *const [i32; 2],
+                    out: *mut [i32; 2],
+                );
+            }
+            let mut out = [0; 2];
+            // SAFETY: the routine reads the log at the offsets `servo::layout` asserts and
+            // `fallback`, and writes `out`.
+            unsafe { __servo_at_age(self, now, age, &fallback, &mut out) };
+            out
+        }
+        #[cfg(not(target_arch = "m68k"))]
+        self.at_age_rust(now, age, fallback)
+    }
+
+    /// [`ArrestLog::at_age`] in Rust (the host's, and the reference for the image's): a
+    /// fixed number of iterations and sign masks, no data-dependent exit (docs/toolchain.md).
+    #[cfg_attr(target_arch = "m68k", allow(dead_code))]
+    fn at_age_rust(&self, now: u32, age: u32, fallback: [i32; 2]) -> [i32; 2] {
         let kept = self.kept as i32;
         let (mut a0, mut a1) = (fallback[0], fallback[1]);
         let mut found = 0i32;
