@@ -168,7 +168,8 @@ impl Board {
     }
 
     /// [`Board::poll`] as the image runs it: the common pass (a subgoal read whole at the
-    /// first try, the servo's common pass: `Servo::step_into`) in one call of
+    /// first try, the servo's common pass or a hold already under way: `Servo::step_into`)
+    /// in one call of
     /// `__servo_board_pass`, which does what the Rust does, bit for bit
     /// (`the_servo_board_image_passes_like_the_host`), through the addresses `ports`; any
     /// other pass in the Rust. The routine decides before it changes anything but the
@@ -189,7 +190,7 @@ impl Board {
         let common =
             unsafe { __servo_board_pass((&mut self.pass as *mut PassState).cast(), ports) };
         let st = if common != 0 {
-            (BoardState::Running, None)
+            self.pass.verdict()
         } else {
             self.pass.run(g, io)
         };
@@ -263,6 +264,13 @@ impl PassState {
             loops: self.loops,
         };
         vme_map::SERVO_STATE.publish_raw(g, &state.to_words());
+        self.verdict()
+    }
+
+    /// The pass's board state (degraded while holding for a fault) and new fault, from the
+    /// servo's output.
+    fn verdict(&self) -> (BoardState, Option<FaultCode>) {
+        let out = &self.out;
         let fault = out.new_fault.map(|why| match why {
             Hold::Stale | Hold::NoSubgoal => FaultCode::StaleHeartbeat,
             Hold::Torn => FaultCode::TornRecord,

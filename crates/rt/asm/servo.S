@@ -679,14 +679,15 @@ servo_control_body:
 /* ---- the common pass of Servo::step ----
  * u32 __servo_pass(Servo *s, const u16 io[3], const i32 sub[3], Output *out): io = both
  * encoder latches and the timer, sub = the subgoal (both goals in urad, the reflex cycle).
- * servo::Servo::step for a pass after the first with a subgoal, no hold (nor a hold's goal)
- * and the proximate law on both links: first, changing nothing, it checks those, the period
- * and the subgoal's verdict; a pass that is not that one, or a subgoal out of range or
- * stale, returns 0 (the Rust then runs the pass). Otherwise, as
- * the Rust does: the extended counts, the period, the observers' settling clock, both
- * links' angles, observers and arrest points, the arrest log, the cycle's age, the goal,
- * both links' law; every field of out (servo::Output: no hold, no new fault, the
- * amplifiers enabled); returns 1.
+ * servo::Servo::step for a pass after the first with a subgoal and the proximate law on
+ * both links, following the subgoal or holding (out of range, stale) at a hold goal chosen
+ * before: first, changing nothing, it checks those, the period and the subgoal's verdict;
+ * a pass that is not that one (among them the first pass of a hold, whose goal comes from
+ * the arrest log) returns 0, and the Rust then runs it. Otherwise, as the Rust does: the
+ * extended counts, the period, the observers' settling clock, both links' angles,
+ * observers and arrest points, the arrest log, the cycle's age, the hold and its fault,
+ * the goal, both links' law; every field of out (servo::Output; the amplifiers enabled);
+ * returns 1.
  * Offsets: servo::layout asserts them. */
     /* Servo */
     .equ SV_LAST_ENC, 2
@@ -699,6 +700,7 @@ servo_control_body:
     .equ SV_HAS_CYCLE, 144
     .equ SV_SINCE_CYCLE, 146
     .equ SV_SINCE_START, 150
+    .equ SV_HOLD_GOAL, 154
     .equ SV_HAS_HOLD_GOAL, 162
     .equ SV_HOLD, 163
     .equ SV_MEMO_URAD, 164
@@ -724,6 +726,8 @@ servo_control_body:
     .equ F_NEW_FAULT, 49
     .equ F_REGIME, 50
     .equ HOLD_NONE, 255         /* Option<Hold>::None (this rustc puts the niche at 255) */
+    .equ HOLD_STALE, 1          /* servo::Hold::Stale, OutOfRange (repr(u8)) */
+    .equ HOLD_OUT_OF_RANGE, 3
     /* servo::params::TIMER_TICK_Q40, servo's STALE_Q32, OBSERVER_SETTLE_Q32,
      * ANGLE_LIMIT_URAD and urad_to_q16's multiplier (servo::layout asserts them) */
     .equ TIMER_TICK_Q40, 549756
@@ -748,13 +752,9 @@ __servo_pass:
  * d0 = the result; d1-d7, a0-a6 clobbered (a6 kept). */
 servo_pass_body:
     movem.l %a1/%a4, -(%sp)     /* sub at 0(sp), out at 4(sp) */
-    /* the common pass only: started, no hold nor hold goal, both links proximate */
+    /* started, both links proximate */
     tst.b   (%a6)               /* started */
     beq     .Lpass_rust
-    cmpi.b  #HOLD_NONE, SV_HOLD(%a6)
-    bne     .Lpass_rust
-    tst.b   SV_HAS_HOLD_GOAL(%a6)
-    bne     .Lpass_rust
     movea.l SV_LINKS(%a6), %a2
     tst.b   K_PROXIMATE(%a2)
     beq     .Lpass_rust
@@ -766,20 +766,23 @@ servo_pass_body:
     sub.w   SV_LAST_TIMER(%a6), %d3
     move.l  %d3, %d5            /* the ticks, written once the pass is the common one */
     MULSHR  %d3, #TIMER_TICK_Q40, 8, %d1, %d7, %d7
-    /* the subgoal's verdict, nothing changed yet: both goals within the angle limit */
+    /* the subgoal's verdict d6 (a Hold, or HOLD_NONE), nothing changed yet: out of range
+     * when a goal is beyond the angle limit */
+    moveq   #-1, %d6            /* HOLD_NONE's byte */
     move.l  (%a1), %d0
     tst.l   %d0                 /* (MOVE sets N too; the image check wants the test) */
     bpl.s   1f
     neg.l   %d0
 1:  cmpi.l  #ANGLE_LIMIT_URAD, %d0
-    bhi     .Lpass_rust         /* unsigned: i32::MIN's magnitude is 2^31 */
+    bhi.s   2f                  /* unsigned: i32::MIN's magnitude is 2^31 */
     move.l  4(%a1), %d0
     tst.l   %d0
-    bpl.s   2f
+    bpl.s   11f
     neg.l   %d0
-2:  cmpi.l  #ANGLE_LIMIT_URAD, %d0
-    bhi     .Lpass_rust
-    /* the cycle's age d4: 0 for a new cycle, else sat(age + dt), stale above STALE */
+11: cmpi.l  #ANGLE_LIMIT_URAD, %d0
+    bls.s   12f
+2:  moveq   #HOLD_OUT_OF_RANGE, %d6
+12: /* the cycle's age d4: 0 for a new cycle, else sat(age + dt); else stale above STALE */
     moveq   #0, %d4
     move.l  8(%a1), %d0
     tst.b   SV_HAS_CYCLE(%a6)
@@ -789,13 +792,31 @@ servo_pass_body:
     move.l  SV_SINCE_CYCLE(%a6), %d4
     add.l   %d3, %d4
     SATV    %d4
+    cmpi.b  #HOLD_NONE, %d6
+    bne.s   3f
     cmpi.l  #STALE_Q32, %d4
-    bgt     .Lpass_rust
-3:  /* the common pass: from here on it changes the state */
+    ble.s   3f
+    moveq   #HOLD_STALE, %d6
+3:  /* a hold whose goal is chosen already: here; a new one (its goal from the arrest log or
+     * the arrest point) in the Rust */
+    cmpi.b  #HOLD_NONE, %d6
+    beq.s   13f
+    tst.b   SV_HAS_HOLD_GOAL(%a6)
+    beq     .Lpass_rust
+13: /* the pass: from here on it changes the state. The hold: new as a fault when its
+     * reason changed; none clears the hold goal */
     move.w  %d5, F_TICKS(%a4)
     move.b  #1, F_ENABLE(%a4)
-    move.b  #HOLD_NONE, F_HOLD(%a4)
+    move.b  %d6, F_HOLD(%a4)
     move.b  #HOLD_NONE, F_NEW_FAULT(%a4)
+    cmpi.b  #HOLD_NONE, %d6
+    bne.s   14f
+    clr.b   SV_HAS_HOLD_GOAL(%a6)
+    bra.s   15f
+14: cmp.b   SV_HOLD(%a6), %d6
+    beq.s   15f
+    move.b  %d6, F_NEW_FAULT(%a4)
+15: move.b  %d6, SV_HOLD(%a6)
     move.l  %d0, SV_LAST_CYCLE(%a6)
     move.b  #1, SV_HAS_CYCLE(%a6)
     move.l  %d4, SV_SINCE_CYCLE(%a6)
@@ -863,9 +884,15 @@ servo_pass_body:
     addq.l  #1, %d0
     sub.l   %d1, %d0
     move.l  %d0, LOG_KEPT(%a0)
-    /* the goal: urad_to_q16 of both (mul_shr(g, URAD_TO_Q16_Q32, 32)), converted again
-     * only when they changed (servo::Servo::goal_q16's memo) */
-    movea.l (%sp), %a1
+    /* the goal: holding, the hold goal; else urad_to_q16 of both (mul_shr(g,
+     * URAD_TO_Q16_Q32, 32)), converted again only when they changed (servo::Servo::goal_q16's
+     * memo) */
+    cmpi.b  #HOLD_NONE, F_HOLD(%a4)
+    beq.s   16f
+    move.l  SV_HOLD_GOAL(%a6), F_GOAL(%a4)
+    move.l  SV_HOLD_GOAL+4(%a6), F_GOAL+4(%a4)
+    bra.s   17f
+16: movea.l (%sp), %a1
     move.l  (%a1), %d0
     move.l  4(%a1), %d2
     cmp.l   SV_MEMO_URAD(%a6), %d0
@@ -881,6 +908,7 @@ servo_pass_body:
     move.l  %d0, SV_MEMO_Q16+4(%a6)
 8:  move.l  SV_MEMO_Q16(%a6), F_GOAL(%a4)
     move.l  SV_MEMO_Q16+4(%a6), F_GOAL+4(%a4)
+17:
     /* the observers' settling clock: settled once it reached SETTLE, else it counts
      * min(dt, MAX_DT) (wrapping, as the release build's +=) */
     suba.l  %a3, %a3            /* a3 = settled (0) */
@@ -933,7 +961,8 @@ servo_pass_body:
  * u32 __servo_board_pass(PassState *b, const Ports *p): board_servo's PassState::run for a
  * pass whose subgoal record reads whole at the first try and whose servo pass is
  * __servo_pass's: latch and read both encoders, read the timer, read the subgoal record
- * (sequence, four words, sequence) and keep it, run __servo_pass into b->out, write both
+ * (sequence, four words, sequence) and keep it, run __servo_pass into b->out (the caller
+ * reads its hold and new fault there), write both
  * DACs and the amplifier enables, count the time and the pass, and publish the servo state
  * under its sequence lock (the six angles in urad as servo::q16_to_urad, the torques in
  * mN m). Returns 1; or 0 when the record is torn or was never published, or __servo_pass

@@ -602,6 +602,8 @@ pub mod layout {
     // the niche goes is the compiler's choice: the pinned nightly puts it at 255, stable
     // 1.95 at 4; this assert is what keeps the routine's `HOLD_NONE` honest.)
     const _: () = assert!(unsafe { core::mem::transmute::<Option<super::Hold>, u8>(None) } == 255);
+    const _: () = assert!(super::Hold::Stale as u8 == 1);
+    const _: () = assert!(super::Hold::OutOfRange as u8 == 3);
     const _: () = assert!(super::Regime::Saturated as u8 == 0);
     const _: () = assert!(super::Regime::Sliding as u8 == 1);
     const _: () = assert!(super::Regime::Linear as u8 == 2);
@@ -632,6 +634,7 @@ pub mod layout {
         assert!(offset_of!(Servo, has_cycle) == 144);
         assert!(offset_of!(Servo, since_cycle_q32) == 146);
         assert!(offset_of!(Servo, since_start_q32) == 150);
+        assert!(offset_of!(Servo, hold_goal_q16) == 154);
         assert!(offset_of!(Servo, has_hold_goal) == 162);
         assert!(offset_of!(Servo, hold) == 163);
         assert!(offset_of!(Servo, goal_memo_urad) == 164);
@@ -746,7 +749,9 @@ pub struct Subgoal {
 }
 
 /// Why the servo is holding at its arrest point instead of following the subgoal.
+/// `repr(u8)`: the image's `__servo_pass` writes the values (`servo::layout` asserts them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Hold {
     /// No subgoal has arrived yet (start-up, or no reflex board): hold quietly.
     NoSubgoal,
@@ -1005,12 +1010,13 @@ impl Servo {
     }
 
     /// The image's common pass in one call of `__servo_pass` (`crates/rt/asm/servo.S`): a
-    /// subgoal read whole, no hold, the proximate law on both links. Before it changes
-    /// anything the routine checks that (started, no hold or hold goal, both links
-    /// proximate) and the subgoal's range and age, and returns 0 if the pass is not the
-    /// common one; the Rust of [`Servo::step`] then runs it. Does what the Rust does, bit
-    /// for bit (`the_servo_image_steps_like_the_host`): the counts, the period, the
-    /// observers, the arrest log, the goal and the law.
+    /// subgoal read whole, the proximate law on both links, following the subgoal or holding
+    /// at a hold goal chosen on an earlier pass (out of range, stale). Before it changes
+    /// anything the routine checks that (started, both links proximate, the subgoal's range
+    /// and age, a hold goal if it holds) and returns 0 if the pass is not that one (the
+    /// first pass of a hold among them); the Rust of [`Servo::step`] then runs it. Does what
+    /// the Rust does, bit for bit (`the_servo_image_steps_like_the_host`): the counts, the
+    /// period, the observers, the arrest log, the hold and its fault, the goal and the law.
     #[cfg(target_arch = "m68k")]
     #[inline(always)]
     fn pass_in_asm(&mut self, input: &Input, out: *mut Output) -> bool {
