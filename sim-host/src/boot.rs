@@ -241,15 +241,28 @@ pub struct Profile {
     pub busy: Option<(u64, u64)>,
 }
 
+/// What `profile` publishes to the servo board as the reflex's subgoal.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ServoFeed {
+    /// The subgoal's angles, urad.
+    pub goal_urad: [i32; 2],
+    /// Milliseconds into the profile after which the subgoal's cycle stops changing.
+    pub freeze_after_ms: Option<f64>,
+}
+
+/// Quarter-milliseconds of host feeds before `profile` starts counting.
+const WARM_UP_QUARTERS: u32 = 800;
+
 /// Boots `board` alone (the sensing board with eight beacons in view, run 0.6 s first to
 /// finish its table check), waits for its first heartbeat, then executes `ms` milliseconds of
 /// emulated time one instruction at a time, charging each instruction's cycles to the
 /// function (nearest symbol at or below the PC) it belongs to.
 ///
-/// The servo board gets what it gets in the running system: a reflex subgoal
-/// (`servo_goal_urad`; the arm's resting angles, 0 and 0, keep it at rest) published every
-/// 0.25 ms with a new cycle, from power-up on (without it every pass is a hold waiting for a
-/// first subgoal).
+/// The servo board gets what it gets in the running system: a reflex subgoal (`subgoal`; the
+/// arm's resting angles, 0 and 0, keep it at rest) published every 0.25 ms with a new cycle,
+/// from power-up on (without it every pass is a hold waiting for a first subgoal); with
+/// `subgoal.freeze_after_ms`, the cycle stops changing that long into the profile, as when
+/// the reflex dies: 20 ms later the servo holds.
 ///
 /// `resting` (the sensing board): the host also publishes a servo state every 0.25 ms with
 /// the arm resting, its tip at the tip's lit beacon (`sensing_bench::RestingServo`), from
@@ -259,7 +272,7 @@ pub fn profile(
     board: BoardId,
     ms: f64,
     resting: bool,
-    servo_goal_urad: [i32; 2],
+    subgoal: ServoFeed,
 ) -> Result<Profile, ImageError> {
     let image = Image::load(&dir.join(format!("{}.elf", image_name(board))))?;
     let mut per = FunctionCycles::new(&image);
@@ -296,6 +309,11 @@ pub fn profile(
     let servo = board == BoardId::Servo;
     let warm_up = feed.is_some() || planner || servo;
     let mut k = 0;
+    // The feed's count at which the subgoal's cycle stops changing (the warm-up's 800
+    // quarter-milliseconds, then the profile's own).
+    let freeze_k = subgoal
+        .freeze_after_ms
+        .map_or(u32::MAX, |ms| WARM_UP_QUARTERS + (ms * 4.0) as u32);
     let mut feed_quarter = |g: &mut [u8]| {
         if resting {
             servo_feed.publish(&mut ArrayBus::new(g));
@@ -308,10 +326,10 @@ pub fn profile(
         }
         if servo {
             let rec = vme_map::records::ReflexSubgoal {
-                goal1_urad: servo_goal_urad[0],
-                goal2_urad: servo_goal_urad[1],
+                goal1_urad: subgoal.goal_urad[0],
+                goal2_urad: subgoal.goal_urad[1],
                 flags: 0,
-                cycle: k + 1,
+                cycle: k.min(freeze_k) + 1,
             };
             vme_map::REFLEX_SUBGOAL.publish(&mut ArrayBus::new(g), &rec);
         }
@@ -319,7 +337,7 @@ pub fn profile(
     };
     let quarter_ms = CPU_HZ / 4000;
     if warm_up {
-        for _ in 0..800 {
+        for _ in 0..WARM_UP_QUARTERS {
             feed_quarter(&mut sys.global);
             sys.run_cycles(quarter_ms);
         }

@@ -179,6 +179,11 @@ enum Cmd {
         #[arg(long, value_delimiter = ',', allow_hyphen_values = true,
               default_values_t = [0, 0])]
         servo_goal_urad: Vec<i32>,
+        /// The servo board: the subgoal's cycle stops changing this many milliseconds into
+        /// the profile, as when the reflex dies (20 ms later the servo holds, its first hold
+        /// pass looking up the arrest point of the last fresh subgoal).
+        #[arg(long)]
+        servo_subgoal_freeze_ms: Option<f64>,
     },
     /// Build the C-space image database from the arm's outline and check it against the
     /// committed `crates/cspace/src/tables.rs` (or rewrite that file with `--write`).
@@ -465,6 +470,7 @@ fn main() -> ExitCode {
             resting,
             addresses,
             servo_goal_urad,
+            servo_subgoal_freeze_ms,
         } => {
             let Some(id) = parse_board(&board) else {
                 eprintln!("sim-host: unknown board {board:?} ({BOARD_NAMES})");
@@ -479,12 +485,22 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             };
             let goal = [g1, g2];
-            if goal != [0, 0] && id != BoardId::Servo {
-                eprintln!("sim-host: --servo-goal-urad is for the servo board");
+            if (goal != [0, 0] || servo_subgoal_freeze_ms.is_some()) && id != BoardId::Servo {
+                eprintln!(
+                    "sim-host: --servo-goal-urad and --servo-subgoal-freeze-ms are for the servo board"
+                );
                 return ExitCode::from(2);
             }
+            if servo_subgoal_freeze_ms.is_some_and(|t| !(0.0..1e6).contains(&t)) {
+                eprintln!("sim-host: --servo-subgoal-freeze-ms wants milliseconds, 0 or more");
+                return ExitCode::from(2);
+            }
+            let servo = sim_host::boot::ServoFeed {
+                goal_urad: goal,
+                freeze_after_ms: servo_subgoal_freeze_ms,
+            };
             let dir = images.unwrap_or_else(default_images_dir);
-            match sim_host::boot::profile(&dir, id, ms, resting, goal) {
+            match sim_host::boot::profile(&dir, id, ms, resting, servo) {
                 Ok(p) => {
                     let per = p.cycles as f64 / p.loops.max(1) as f64;
                     println!(

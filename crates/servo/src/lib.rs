@@ -1231,8 +1231,8 @@ impl Servo {
                 // Subgoals that stopped coming (stale, or torn since): the arrest point of
                 // the last fresh one. A bad subgoal: the arrest point now.
                 if !self.has_hold_goal {
-                    // (No look-up for the others: it costs ~44,000 cycles, which the first
-                    // pass, waiting for a first subgoal, would add to the start-up.)
+                    // (No look-up for the others: a bad subgoal holds where the arm would
+                    // stop now, and the first pass, waiting for a first subgoal, has no log.)
                     self.hold_goal_q16 = match why {
                         Hold::Stale | Hold::Torn => self.log.at_age(
                             self.log.newest_t(),
