@@ -353,7 +353,7 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
 
 /// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its
 /// common pass takes 6,275 cycles at rest, 7,160 on the braking curve (a square root a
-/// link) and 6,232 holding, of the 8,350 a 2,000 Hz period has at 16.7 MHz (`sim-host
+/// link) and 6,226 holding, of the 8,350 a 2,000 Hz period has at 16.7 MHz (`sim-host
 /// profile servo`, `--servo-goal-urad`; docs/servo.md). 3 kHz leaves 5,566.
 pub const IMAGE_HZ: f64 = 2000.0;
 
