@@ -331,9 +331,6 @@ fn the_arrest_log_look_up_matches_the_host() {
     let f = img
         .symbol("__servo_at_age")
         .expect("__servo_at_age in the image");
-    let put = |b: &mut EmuBoard, a: u32, w: u32| {
-        b.ram[a as usize..a as usize + 4].copy_from_slice(&w.to_be_bytes())
-    };
     let mut rng = sim_host::sim::Rng::new(5);
     let (mut cases, mut worst) = (0, 0u64);
     for (passes, start, step) in [
@@ -352,24 +349,24 @@ fn the_arrest_log_look_up_matches_the_host() {
             log.push(t, [k as i32, -(k as i32) * 7]);
         }
         let (n, kept, ts, arrest) = log.raw();
-        put(&mut b, BUF, n);
-        put(&mut b, BUF + 4, kept);
+        put_word(&mut b.ram, BUF, n);
+        put_word(&mut b.ram, BUF + 4, kept);
         for i in 0..PASSES {
-            put(&mut b, BUF + 8 + 4 * i as u32, ts[i]);
-            put(
-                &mut b,
+            put_word(&mut b.ram, BUF + 8 + 4 * i as u32, ts[i]);
+            put_word(
+                &mut b.ram,
                 BUF + 8 + 4 * PASSES as u32 + 8 * i as u32,
                 arrest[i][0] as u32,
             );
-            put(
-                &mut b,
+            put_word(
+                &mut b.ram,
                 BUF + 12 + 4 * PASSES as u32 + 8 * i as u32,
                 arrest[i][1] as u32,
             );
         }
         let (fb, out) = (BUF + 0x1000, BUF + 0x1010);
-        put(&mut b, fb, 11);
-        put(&mut b, fb + 4, (-12i32) as u32);
+        put_word(&mut b.ram, fb, 11);
+        put_word(&mut b.ram, fb + 4, (-12i32) as u32);
         let now = log.newest_t();
         let mut ages = vec![
             0,
@@ -432,8 +429,7 @@ fn servo_script(i: u32, period: u32, t: &mut u32, s: &mut u32) -> [u32; 4] {
 fn run_probe(b: &mut EmuBoard, g: &mut [u8], f: u32, inputs: &[u32], n: u32) -> u32 {
     let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
     for (k, w) in inputs.iter().enumerate() {
-        let a = (inp + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+        put_word(&mut b.ram, inp + 4 * k as u32, *w);
     }
     let (ret, _) = b
         .call(g, f, &[inp, n, out], 1_000_000_000)
@@ -446,6 +442,11 @@ fn run_probe(b: &mut EmuBoard, g: &mut [u8], f: u32, inputs: &[u32], n: u32) -> 
 fn ram_word(b: &EmuBoard, addr: u32) -> u32 {
     let a = addr as usize;
     u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+}
+
+/// Writes `w` big-endian at `addr` of a board's RAM.
+fn put_word(ram: &mut [u8], addr: u32, w: u32) {
+    ram[addr as usize..addr as usize + 4].copy_from_slice(&w.to_be_bytes());
 }
 
 /// Private I/O registers as plain halfwords, as the servo image's board probe keeps them.
@@ -705,8 +706,7 @@ fn count_column_matches_the_host_bus() {
         let skip = (rng.next_u64() % (total as u64 + 1)) as u32 * (case % 2);
         let down = case % 3 == 0;
         for (k, w) in pieces.iter().enumerate() {
-            let a = pieces_at as usize + 4 * k;
-            b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+            put_word(&mut b.ram, pieces_at + 4 * k as u32, *w);
         }
         let col = cspace_counter(i1, 0, 0);
         assert_eq!(col, CSPACE_MAP + 4 * i1);
@@ -746,8 +746,7 @@ fn the_sensing_filter_matches_the_host_bit_for_bit() {
     // The reciprocal table the board passes, in board RAM.
     let table_at = BUF + 0x1000;
     for (n, v) in RECIP_Q16.iter().enumerate() {
-        let a = table_at as usize + 4 * n;
-        b.ram[a..a + 4].copy_from_slice(&v.to_be_bytes());
+        put_word(&mut b.ram, table_at + 4 * n as u32, *v as u32);
     }
     let (fa, ea) = (BUF as usize, BUF as usize + 0x800);
     let mut host = Filter::new();
@@ -989,9 +988,6 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
     let mut rng = sim_host::sim::Rng::new(47);
     let mut r = move |n: i64| (rng.next_u64() % (2 * n as u64 + 1)) as i64 - n;
     let words = (2 * INV_N * INV_N) as usize;
-    let put = |ram: &mut [u8], at: u32, v: i32| {
-        ram[at as usize..at as usize + 4].copy_from_slice(&v.to_be_bytes())
-    };
     let (mut outside, mut clamped, mut corrected, mut edges) = (0, 0, 0, 0);
     for table in 0..6 {
         // Smooth grids (a scale and an offset per axis) with noise, and pure noise.
@@ -1006,7 +1002,7 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
                 r(MAX_NODE_UM as i64)
             };
             inv.0[k] = v as i32 as u32;
-            put(&mut b.ram, inv_at + 4 * k as u32, v as i32);
+            put_word(&mut b.ram, inv_at + 4 * k as u32, v as u32);
         }
         for _ in 0..3_000 {
             let span = if r(4) == 0 { 1 << 18 } else { 70_000 };
@@ -1045,11 +1041,11 @@ fn the_sensing_position_lookup_matches_the_host_bit_for_bit() {
             use sensing::drift::layout::{K_Q14, O_Q13};
             for (at, words) in [(O_Q13, drift.o_q13), (K_Q14, drift.k_q14)] {
                 for (n, w) in words.iter().enumerate() {
-                    put(&mut b.ram, drift_at + (at + 4 * n) as u32, *w);
+                    put_word(&mut b.ram, drift_at + (at + 4 * n) as u32, *w as u32);
                 }
             }
             for (n, w) in area.iter().enumerate() {
-                put(&mut b.ram, area_at + 4 * n as u32, *w);
+                put_word(&mut b.ram, area_at + 4 * n as u32, *w as u32);
             }
             let (got, _) = b
                 .call(
