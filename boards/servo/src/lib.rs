@@ -169,8 +169,7 @@ impl Board {
 
     /// [`Board::poll`] as the image runs it: the common pass (a subgoal read whole at the
     /// first try, the servo's common pass or a hold already under way: `Servo::step_into`)
-    /// in one call of
-    /// `__servo_board_pass`, which does what the Rust does, bit for bit
+    /// in one call of `__servo_board_pass`, which does what the Rust does, bit for bit
     /// (`the_servo_board_image_passes_like_the_host`), through the addresses `ports`; any
     /// other pass in the Rust. The routine decides before it changes anything but the
     /// encoder latch and the last subgoal read whole (which the Rust then reads again).

@@ -413,14 +413,14 @@ __vme_count_column:
 9:  movem.l (%sp)+, %d2-%d7/%a2-%a4
     rts
 
-/* ---- fixed-point multiply: the servo's only wide arithmetic (crates/servo::fx) ----
+/* ---- fixed-point multiply: the servo's only wide arithmetic (crates/fx) ----
  * i32 __fx_mul_shr(i32 a, i32 b, u32 sh), 1 <= sh <= 32:
  *   round((a * b) >> sh), saturated to i32: the 64-bit product of MULS.L, plus 1 << (sh-1),
- *   arithmetic shift right. Bit-identical to the host version in crates/servo/src/fx.rs. */
+ *   arithmetic shift right. Bit-identical to the host version in crates/fx/src/lib.rs. */
 /* i32 __fx_div(i32 num, i32 den, u32 sh), 0 <= sh <= 31:
  *   (num * 2^sh) / den truncated toward zero, saturated to i32; den = 0 gives i32::MAX for
  *   num >= 0 and i32::MIN otherwise. DIVS.L divides the 64-bit dividend in two registers.
- *   Bit-identical to the host version in crates/servo/src/fx.rs. */
+ *   Bit-identical to the host version in crates/fx/src/lib.rs. */
     .section .text.__fx_div, "ax"
     .globl __fx_div
 __fx_div:

@@ -199,7 +199,7 @@ __fx_mul_shr\sh:
  * for every such n (checked exhaustively on the host for the table below; r1 reaches 65536
  * only where the floor is 65535), then one MULU.W to take the floor; for smaller n digit by
  * digit, 16 rounds of compare, subtract and shift. Bit-identical to host_sqrt_q16 in
- * crates/servo/src/fx.rs. */
+ * crates/fx/src/lib.rs. */
 .macro SQRT_Q16 x, r, t, u, s, a
     tst.l   \x
     ble     .Lqz\@
@@ -962,9 +962,8 @@ servo_pass_body:
  * pass whose subgoal record reads whole at the first try and whose servo pass is
  * __servo_pass's: latch and read both encoders, read the timer, read the subgoal record
  * (sequence, four words, sequence) and keep it, run __servo_pass into b->out (the caller
- * reads its hold and new fault there), write both
- * DACs and the amplifier enables, count the time and the pass, and publish the servo state
- * under its sequence lock (the six angles in urad as servo::q16_to_urad, the torques in
+ * reads its hold and new fault there), write both DACs and the amplifier enables, count
+ * the time and the pass, and publish the servo state under its sequence lock (the six angles in urad as servo::q16_to_urad, the torques in
  * mN m). Returns 1; or 0 when the record is torn or was never published, or __servo_pass
  * returned 0, having changed nothing but the encoder latch and the subgoal kept (the Rust
  * then runs the pass and reads both again).
