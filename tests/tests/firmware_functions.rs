@@ -201,7 +201,7 @@ fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
         let want = servo::fx::host_mul_shr(a, bb, sh);
         assert_eq!(f(&[a, bb, sh as i32]), want, "mul_shr({a}, {bb}, {sh})");
     }
-    for sh in [8, 16, 17, 24, 28, 32] {
+    for sh in [8u32, 16, 17, 24, 28, 32] {
         let mut f = any_routine(&format!("__fx_mul_shr{sh}"));
         // The cases, and values just inside and outside the range that fits.
         let mut pairs: Vec<(i32, i32)> = cases.iter().map(|&(a, b, _)| (a, b)).collect();
@@ -209,6 +209,18 @@ fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
             let top = (1i64 << (31 + sh)) / 65536 + k;
             pairs.push(((top.clamp(i32::MIN as i64, i32::MAX as i64)) as i32, 65536));
             pairs.push(((-top).clamp(i32::MIN as i64, i32::MAX as i64) as i32, 65536));
+        }
+        if sh < 32 {
+            // Products on both sides of each end of the range, rounding included: T =
+            // 2^(sh-1) (2^32 - 1) = 2^(sh-1) 65535 65537 is the least that rounds past
+            // i32::MAX, -2^(sh-1) (2^32 + 1) = -2^(sh-1) 641 6700417 the least negative that
+            // still rounds to i32::MIN (one below it does not fit).
+            let j = sh.saturating_sub(16) as i32;
+            let (a, b) = (65537i32 << j, 65535i32 << (sh as i32 - 1 - j));
+            pairs.extend([(a, b), (a - 1, b), (-a, b), (-a + 1, b), (b, -a), (-b, -a)]);
+            let j = sh.saturating_sub(22) as i32;
+            let (a, b) = (-6700417i32 << j, 641i32 << (sh as i32 - 1 - j));
+            pairs.extend([(a, b), (a - 1, b), (-a, -b), (-a + 1, -b), (b, a), (-b, -a)]);
         }
         for (a, bb) in pairs {
             let want = servo::fx::host_mul_shr(a, bb, sh);

@@ -107,9 +107,13 @@
 /* MULSHR a, b, sh, h, t: a = round(a * b / 2^sh) saturated to i32, fx::mul_shr with a
  * fixed shift (8, 16, 17, 24, 28 or 32); b any data addressing mode, h a scratch data
  * register, t a scratch data or address register, z (optional) a scratch data register
- * for the rounding carry (MOVEQ and ADDX: faster than the branch without it). The 64-bit product of MULS.L plus
- * 2^(sh-1); it fits in 32 bits after the shift when h + 2^(sh-1) < 2^sh (unsigned);
- * otherwise the sign of h says which way it saturates (that branch is out of line). */
+ * for the rounding carry (MOVEQ and ADDX: faster than the branch without it). The 64-bit
+ * product of MULS.L plus 2^(sh-1) fits in 32 bits after the shift when h lies in
+ * [-2^(sh-33), 2^(sh-33)) (sh < 32); otherwise the sign of h says which way it saturates
+ * (that branch is out of line). The check per shift, the cheapest found on the 68020:
+ * 16, h equal to its low word sign-extended (MOVE.W, EXT.L or MOVEA.W, CMP); 24 and 28,
+ * the V flag of ASL.L shifting h into place (set when a bit unlike the sign leaves it; t
+ * keeps h for the sign); 8 and 17, h + 2^(sh-33) below 2^(sh-32) unsigned. */
 .macro MULSHR a, b, sh, h, t, z
     muls.l  \b, \h:\a
 .if \sh == 32
@@ -128,49 +132,73 @@
     moveq   #0, \z
     addx.l  \z, \h
   .endif
+  .if \sh == 16
+    MR_SEXTW_NE \h, \t
+    bne     .Lms\@
+    move.w  \h, \a
+    swap    \a
+  .elseif \sh == 24
+    move.l  \h, \t
+    asl.l   #8, \h
+    bvs     .Lms\@
+    rol.l   #8, \a
+    move.b  \a, \h
+    move.l  \h, \a
+  .elseif \sh == 28
+    move.l  \h, \t
+    asl.l   #4, \h
+    bvs     .Lms\@
+    bfextu  \a{#0:#4}, \a
+    or.l    \h, \a
+  .else
     move.l  \h, \t
     add.l   #(1 << (\sh - 1)), \t
     cmp.l   #(1 << \sh), \t
     bcc     .Lms\@
-  .if \sh == 8
+    .if \sh == 8
     lsr.l   #8, \a
     swap    \h
     clr.w   \h
     lsl.l   #8, \h
     or.l    \h, \a
-  .elseif \sh == 16
-    move.w  \h, \a
-    swap    \a
-  .elseif \sh == 17
+    .elseif \sh == 17
     clr.w   \a
     swap    \a
     lsr.l   #1, \a
     lsl.l   #8, \h
     lsl.l   #7, \h
     or.l    \h, \a
-  .elseif \sh == 24
-    lsl.l   #8, \h
-    rol.l   #8, \a
-    move.b  \a, \h
-    move.l  \h, \a
-  .elseif \sh == 28
-    rol.l   #4, \a
-    andi.l  #15, \a
-    lsl.l   #4, \h
-    or.l    \h, \a
-  .else
+    .else
     .error "MULSHR: unsupported shift"
+    .endif
   .endif
 .Lmd\@:
     .subsection 1
 .Lms\@:
     move.l  #0x7fffffff, \a
+  .if \sh >= 24
+    tst.l   \t                  /* h before the shift */
+  .else
     tst.l   \h
+  .endif
     bpl     .Lmd\@
     addq.l  #1, \a
     bra     .Lmd\@
     .subsection 0
 .endif
+.endm
+
+/* MR_SEXTW_NE h, t: Z clear (NE) unless h equals its low word sign-extended; t scratch
+ * (MOVEA.W sign-extends by itself into an address register). */
+.macro MR_SEXTW_NE h, t
+  .ifc \t,%a0
+    movea.w \h, \t
+    cmpa.l  \h, \t
+  .else
+    move.w  \h, \t
+    ext.l   \t
+    cmp.l   \h, \t
+  .endif
 .endm
 
 /* i32 __fx_mul_shrN(i32 a, i32 b) for N = 8, 16, 17, 24, 28, 32: fx::mul_shr(a, b, N)
@@ -603,7 +631,8 @@ servo_control_body:
     move.l  #DAC_MIN, %d0
 12: move.l  %d0, %d6            /* code */
     move.l  %d0, %d4
-    muls.l  K_NM_PER_DAC(%a2), %d4 /* the torque it makes (32-bit product) */
+    muls.w  K_NM_PER_DAC+2(%a2), %d4 /* the torque it makes: the code and nm_per_dac
+                                 * (its low word; params asserts it fits) are i16 */
     /* full torque the way the link turns, once the observers are settled */
     cmpa.w  #0, %a5
     beq     14f

@@ -225,7 +225,7 @@ pub struct LinkConst {
     pub moving_q16: i32,
     /// DAC codes per N m, Q16.
     pub dac_per_nm_q16: i32,
-    /// N m per DAC code, Q16.
+    /// N m per DAC code, Q16; within i16 (the 68020 multiplies it with `MULS.W`).
     pub nm_per_dac_q16: i32,
     /// Observer gain K1 at the nominal period, Q16 1/s.
     pub k1_q16: i32,
@@ -263,6 +263,16 @@ const fn fit(x: i64) -> i32 {
     assert!(
         x >= i32::MIN as i64 && x <= i32::MAX as i64,
         "fixed-point constant out of i32 range"
+    );
+    x as i32
+}
+
+/// [`fit`] for a constant the 68020 multiplies with `MULS.W` (16 x 16 bits): the torque
+/// per DAC code, times a code within the DAC's 12 bits (crates/rt/asm/servo.S).
+const fn fit_i16(x: i64) -> i32 {
+    assert!(
+        x >= i16::MIN as i64 && x <= i16::MAX as i64,
+        "fixed-point constant out of i16 range"
     );
     x as i32
 }
@@ -317,7 +327,7 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         },
         moving_q16: fit(round(Q16 * 0.05)),
         dac_per_nm_q16: fit(round(Q16 / nm_per_code)),
-        nm_per_dac_q16: fit(round(Q16 * nm_per_code)),
+        nm_per_dac_q16: fit_i16(round(Q16 * nm_per_code)),
         k1_q16: fit(round(Q16 * k1)),
         k2_q8: fit(round(256.0 * k2)),
         omega_limit_q16: fit(round(Q16 * 2.0 * l.max_speed_rad_s)),
