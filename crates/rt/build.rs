@@ -21,12 +21,17 @@ fn main() {
         return;
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    std::fs::write(out.join("sqrt_table.s"), sqrt_table())
+        .expect("cannot write sqrt_table.s in OUT_DIR");
     let lib = out.join("librtasm.a");
     let _ = std::fs::remove_file(&lib);
     for s in SOURCES {
         let obj = out.join(format!("{s}.o"));
         run(Command::new("m68k-linux-gnu-as")
-            .args(["-m68020", "-o"])
+            .arg("-m68020")
+            .arg("-I")
+            .arg(&out)
+            .arg("-o")
             .arg(&obj)
             .arg(format!("asm/{s}.S")));
         run(Command::new("m68k-linux-gnu-ar")
@@ -36,4 +41,28 @@ fn main() {
     }
     println!("cargo:rustc-link-search=native={}", out.display());
     println!("cargo:rustc-link-lib=static:+whole-archive=rtasm");
+}
+
+/// The square root's table for `SQRT_Q16` in asm/servo.S: `.long` lines of
+/// T[i] = floor(2^19 sqrt(i)) = floor(sqrt(i 2^38)), i = 256..=1024, exact in integers.
+fn sqrt_table() -> String {
+    let mut s = String::new();
+    let t: Vec<u64> = (256u64..=1024)
+        .map(|i| {
+            let n = i << 38;
+            let mut r = (n as f64).sqrt() as u64;
+            while r * r > n {
+                r -= 1;
+            }
+            while (r + 1) * (r + 1) <= n {
+                r += 1;
+            }
+            r
+        })
+        .collect();
+    for row in t.chunks(8) {
+        let v: Vec<String> = row.iter().map(|r| r.to_string()).collect();
+        s += &format!("    .long   {}\n", v.join(", "));
+    }
+    s
 }

@@ -266,34 +266,49 @@ fn the_fixed_point_divide_matches_the_host_bit_for_bit() {
     }
 }
 
-/// The square root's one Newton step (`SQRT_Q16` in crates/rt/asm/servo.S) lands within one
-/// above the floor for every n in [2^30, 2^32), which is what lets one `MULU.W` take it down
-/// to the floor: the image's seed table is round(sqrt((b + 1/2) 2^24)) for each top byte b,
-/// and from a seed r0 the step (r0 + n / r0) / 2 exceeds sqrt(n) by at most
-/// (r0 - sqrt(n))^2 / (2 r0), largest at a bucket's ends (the square grows away from r0^2
-/// on both sides), where it must stay below 1. (An exhaustive check over all 3.2e9 n on the
-/// host agreed: never below the floor, at most one above.)
+/// The square root's interpolated table (`SQRT_Q16` in crates/rt/asm/servo.S) gives the
+/// floor or one less for every n in [2^30, 2^32), which is what lets one `MULU.W` take it up
+/// to the floor. The image's table must be T[i] = floor(2^19 sqrt(i)), i = 256..=1024 (so
+/// every chord runs below the concave root: never above the floor), and in every segment
+/// the root can exceed the interpolation, in Q8, by at most the chord's largest gap (where
+/// the root's slope 128 / sqrt(n) meets the chord's), plus one for the product's floor and
+/// 63 / 2^22 of the chord's rise for the six low bits of n left out, which must stay below
+/// one unit of the root (256). (An exhaustive check of all 3.2e9 n on the host agreed:
+/// never above the floor, at most one below, largest gap 0.024.)
 #[test]
-fn the_square_root_seeds_take_one_newton_step_to_within_one_of_the_floor() {
+fn the_square_root_table_interpolates_to_within_one_of_the_floor() {
     let (b, img, _) = board_of(BoardId::Servo);
     let table = img
-        .symbol("__fx_sqrt_seed")
-        .expect("__fx_sqrt_seed in the image");
-    let mut worst = 0f64;
-    for top in 64u32..256 {
-        let a = (table + 2 * (top - 64)) as usize;
-        let r0 = u16::from_be_bytes([b.ram[a], b.ram[a + 1]]) as f64;
-        assert_eq!(
-            r0,
-            ((top as f64 + 0.5) * 16_777_216.0).sqrt().round(),
-            "seed {top}"
+        .symbol("__fx_sqrt_table")
+        .expect("__fx_sqrt_table in the image");
+    let t: Vec<u64> = (0..=768u32)
+        .map(|k| {
+            let a = (table + 4 * k) as usize;
+            u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]]) as u64
+        })
+        .collect();
+    for (k, &v) in t.iter().enumerate() {
+        let n = (256 + k as u128) << 38;
+        assert!(
+            (v as u128).pow(2) <= n && (v as u128 + 1).pow(2) > n,
+            "T[{}] = {v}",
+            256 + k
         );
-        for n in [(top as u64) << 24, ((top as u64 + 1) << 24) - 1] {
-            let excess = (r0 - (n as f64).sqrt()).powi(2) / (2.0 * r0);
-            worst = worst.max(excess);
-        }
     }
-    assert!(worst < 0.5, "the step exceeds the root by up to {worst}");
+    let mut worst = 0f64;
+    for k in 0..768usize {
+        let x0 = ((256 + k) as f64) * 4_194_304.0;
+        let (t0, d) = (t[k] as f64, (t[k + 1] - t[k]) as f64);
+        assert!(d < 65536.0, "segment {k}: a rise of {d} does not fit MULU.W");
+        let chord = |n: f64| t0 + d * (n - x0) / 4_194_304.0;
+        let at = (128.0 * 4_194_304.0 / d).powi(2).clamp(x0, x0 + 4_194_303.0);
+        let gap = [x0, at, x0 + 4_194_303.0]
+            .iter()
+            .map(|&n| 256.0 * n.sqrt() - chord(n))
+            .fold(f64::MIN, f64::max);
+        worst = worst.max(gap + 1.0 + d * 63.0 / 4_194_304.0);
+    }
+    assert!(worst < 256.0, "the interpolation falls short by up to {worst} / 256");
 }
 
 #[test]
@@ -325,6 +340,14 @@ fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
     for b in 0..256u32 {
         for low in [0u32, 0x7F_FFFF, 0xFF_FFFF] {
             cases.push(((b << 24 | low) >> 1) as i32);
+        }
+    }
+    // Both ends and the middle of every segment of the interpolated table: n = x for x in
+    // [2^30, 2^31), n = 4 x for x in [2^29, 2^30).
+    for i in 256..1024u32 {
+        for low in [0u32, 0x20_0000, 0x3F_FFFF] {
+            let n = i << 22 | low;
+            cases.push(if i < 512 { n as i32 } else { (n >> 2) as i32 });
         }
     }
     for x in cases {

@@ -222,11 +222,14 @@ __fx_mul_shr\sh:
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
  * 32 bits (BFFFO finds the leading zeros) to n, the integer root of n is taken and shifted
- * left by (16 - s) / 2. For n >= 2^30 the root is a seed from n's top byte and one Newton
- * step with DIVU.L, r1 = (r0 + n / r0) / 2, which lies in [floor(sqrt(n)), floor(sqrt(n)) + 1]
- * for every such n (checked exhaustively on the host for the table below; r1 reaches 65536
- * only where the floor is 65535), then one MULU.W to take the floor; for smaller n digit by
- * digit, 16 rounds of compare, subtract and shift. Bit-identical to host_sqrt_q16 in
+ * left by (16 - s) / 2. For n >= 2^30 the root is interpolated in a table of
+ * T[i] = floor(2^19 sqrt(i)), the roots of i 2^22 in Q8 for i = 256..1024 (crates/rt/build.rs
+ * writes it): with i = n >> 22 and f the next 16 bits of n, r = (T[i] + (T[i+1] - T[i]) f /
+ * 2^16) >> 8. sqrt is concave and every step rounds down, so r <= floor(sqrt(n)); the chord
+ * and the roundings lose less than one (at most 0.03, tested on the image's table), so r is
+ * the floor or one less, and one MULU.W takes it up when (r + 1)^2 <= n (as r^2 + 2r < n,
+ * which stays below 2^32). No divide (DIVU.L is 92 cycles on the 68020). For smaller n digit
+ * by digit, 16 rounds of compare, subtract and shift. Bit-identical to host_sqrt_q16 in
  * crates/fx/src/lib.rs. */
 .macro SQRT_Q16 x, r, t, u, s, a
     tst.l   \x
@@ -240,24 +243,24 @@ __fx_mul_shr\sh:
     lsl.l   \s, \x              /* n = x << s */
     cmpi.l  #0x40000000, \x
     bcs.s   .Lqd\@              /* n < 2^30 (x below 2^14): digit by digit */
-    move.l  \x, \t
-    rol.l   #8, \t
-    andi.l  #255, \t            /* top byte, 64..255 */
-    lea     __fx_sqrt_seed-128, \a
-    moveq   #0, \r
-    move.w  (\a,\t\().l*2), \r  /* r0 = sqrt((byte + 1/2) 2^24), rounded */
-    move.l  \x, \t
-    divu.l  \r, \t              /* n / r0 */
+    bfextu  \x{#0:#10}, \t      /* i = n >> 22, 256..1023 */
+    lea     __fx_sqrt_table-1024, \a
+    move.l  (\a,\t\().l*4), \r  /* T[i] */
+    move.l  4(\a,\t\().l*4), \u /* T[i+1] */
+    sub.l   \r, \u              /* below 2^14 */
+    bfextu  \x{#10:#16}, \t     /* f */
+    mulu.w  \t, \u
+    clr.w   \u
+    swap    \u
+    add.l   \u, \r
+    lsr.l   #8, \r              /* the floor of sqrt(n) or one less */
+    move.l  \r, \t
+    mulu.w  \t, \t
     add.l   \r, \t
-    lsr.l   #1, \t              /* r1 = (r0 + n / r0) / 2 */
-    move.l  \t, \r
-    cmpi.l  #0xffff, \t
-    bhi.s   .Lqm\@
-    mulu.w  \t, \t              /* r1^2, below 2^32 */
-    cmp.l   \x, \t
-    bls.s   .Lqf\@              /* r1^2 <= n: r1 is the floor */
-.Lqm\@:
-    subq.l  #1, \r              /* else r1 - 1 is (65536: 65535) */
+    add.l   \r, \t              /* r^2 + 2r */
+    sub.l   \x, \t              /* borrow (X) when below n */
+    moveq   #0, \u
+    addx.l  \u, \r              /* r + 1 when (r + 1)^2 <= n */
     bra.s   .Lqf\@
 .Lqd\@:
     moveq   #0, \r              /* r */
@@ -293,32 +296,19 @@ __fx_mul_shr\sh:
  * the servo's law takes it inline). */
     .section .text.__fx_sqrt_q16, "ax"
     .globl __fx_sqrt_q16
-    .globl __fx_sqrt_seed
+    .globl __fx_sqrt_table
 __fx_sqrt_q16:
     movem.l %d2-%d4, -(%sp)     /* argument now at 16 */
     move.l  16(%sp), %d0
     SQRT_Q16 %d0, %d1, %d2, %d3, %d4, %a0
     movem.l (%sp)+, %d2-%d4
     rts
-/* Seeds of the square root for n's top byte b = 64..255: round(sqrt((b + 1/2) 2^24)). */
+/* T[i] = floor(2^19 sqrt(i)) for i = 256..1024 (u32), written by crates/rt/build.rs; data,
+ * not code (the image check reads .text as instructions). */
+    .section .rodata.__fx_sqrt_table, "a"
     .even
-__fx_sqrt_seed:
-    .word   32896, 33150, 33402, 33652, 33900, 34147, 34392, 34635, 34876, 35116, 35354, 35590
-    .word   35825, 36059, 36291, 36521, 36750, 36978, 37204, 37429, 37652, 37874, 38095, 38315
-    .word   38533, 38750, 38966, 39181, 39394, 39606, 39818, 40028, 40237, 40445, 40652, 40857
-    .word   41062, 41266, 41469, 41671, 41871, 42071, 42270, 42468, 42665, 42861, 43057, 43251
-    .word   43445, 43637, 43829, 44020, 44210, 44400, 44588, 44776, 44963, 45149, 45334, 45519
-    .word   45703, 45886, 46069, 46250, 46431, 46612, 46791, 46970, 47149, 47326, 47503, 47679
-    .word   47855, 48030, 48204, 48378, 48551, 48723, 48895, 49067, 49237, 49407, 49577, 49746
-    .word   49914, 50082, 50249, 50416, 50582, 50747, 50912, 51077, 51241, 51404, 51567, 51730
-    .word   51892, 52053, 52214, 52374, 52534, 52694, 52853, 53011, 53169, 53327, 53484, 53640
-    .word   53797, 53952, 54108, 54262, 54417, 54571, 54724, 54877, 55030, 55182, 55334, 55485
-    .word   55636, 55787, 55937, 56087, 56236, 56385, 56534, 56682, 56830, 56977, 57124, 57271
-    .word   57417, 57563, 57709, 57854, 57999, 58143, 58287, 58431, 58574, 58717, 58860, 59002
-    .word   59144, 59286, 59427, 59568, 59709, 59849, 59989, 60129, 60268, 60407, 60546, 60684
-    .word   60822, 60960, 61098, 61235, 61372, 61508, 61644, 61780, 61916, 62051, 62186, 62321
-    .word   62456, 62590, 62724, 62857, 62991, 63124, 63256, 63389, 63521, 63653, 63785, 63916
-    .word   64047, 64178, 64309, 64439, 64569, 64699, 64828, 64957, 65086, 65215, 65344, 65472
+__fx_sqrt_table:
+    .include "sqrt_table.s"
 
 
 /* CLAMP r, lim, t: r = clamp(r, -lim, lim) for lim >= 0 (any data mode); t scratch. */
