@@ -299,16 +299,24 @@ fn the_square_root_table_interpolates_to_within_one_of_the_floor() {
     for k in 0..768usize {
         let x0 = ((256 + k) as f64) * 4_194_304.0;
         let (t0, d) = (t[k] as f64, (t[k + 1] - t[k]) as f64);
-        assert!(d < 65536.0, "segment {k}: a rise of {d} does not fit MULU.W");
+        assert!(
+            d < 65536.0,
+            "segment {k}: a rise of {d} does not fit MULU.W"
+        );
         let chord = |n: f64| t0 + d * (n - x0) / 4_194_304.0;
-        let at = (128.0 * 4_194_304.0 / d).powi(2).clamp(x0, x0 + 4_194_303.0);
+        let at = (128.0 * 4_194_304.0 / d)
+            .powi(2)
+            .clamp(x0, x0 + 4_194_303.0);
         let gap = [x0, at, x0 + 4_194_303.0]
             .iter()
             .map(|&n| 256.0 * n.sqrt() - chord(n))
             .fold(f64::MIN, f64::max);
         worst = worst.max(gap + 1.0 + d * 63.0 / 4_194_304.0);
     }
-    assert!(worst < 256.0, "the interpolation falls short by up to {worst} / 256");
+    assert!(
+        worst < 256.0,
+        "the interpolation falls short by up to {worst} / 256"
+    );
 }
 
 #[test]
