@@ -9,7 +9,11 @@
 //! C-space image then slides rigidly along the diagonal (thesis ch. IV section 5, the polar
 //! shift), so its borders move at exactly that speed, the thesis's quasi-static bound of 30
 //! pixels per second (line ~1597). The arm starts at least 30 mm from every disk, and stays
-//! so for the first half second if it did not move (the boards' start-up).
+//! so for the first half second if it did not move (the boards' start-up), and not between
+//! two bands of theta1 in which link 1 touches a disk whatever theta2 that close within the
+//! scene (a faster disk catching a slower one round the shoulder): there no controller
+//! keeps link 1 off a disk ([`link1_trapped_s`]; 12 of the first 500 moving scenes of seed 1
+//! drew such a start, and all 12 collided).
 //!
 //! Scenes are independent and seeded by the campaign seed and their index, so a campaign's
 //! results do not depend on how many threads run it; a scene with a collision is written
@@ -116,6 +120,11 @@ pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
                     .iter()
                     .all(|o| p.clearance_m(&o.at(0.05 * k as f64)) >= clear_m)
             });
+            // Nor between two of link 1's bands of theta1 that close within the scene: no
+            // controller keeps link 1 off a disk there (`link1_trapped_s`).
+            let clear = clear
+                && (kind == Kind::Static
+                    || link1_trapped_s(s[0], &obstacles, kind.duration_s()).is_none());
             if clear {
                 start = Some(s);
                 break;
@@ -159,6 +168,123 @@ pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
     }
 }
 
+/// Time step of [`link1_trapped_s`], s.
+const TRAP_DT_S: f64 = 0.0005;
+
+/// How far [`link1_trapped_s`]'s arm may move between its steps beyond the free gap it is
+/// in, rad: more than a band edge moves in a step at the campaign's fastest
+/// ([`MAX_BORDER_RAD_S`], 1.47 rad/s: 0.74 mrad).
+const TRAP_SLACK_RAD: f64 = 0.001;
+
+/// Half the width, rad, of the band of theta1 in which link 1 (the rectangle of
+/// [`arm::geometry::OUTLINE`]) touches a disk of radius `r_m` whose centre is `d_m` from the
+/// shoulder, whatever theta2: the largest angle between the link and the disk's bearing at
+/// which the rectangle is within `r_m` of the centre (the collision oracle's contact,
+/// clearance <= 0), to 1e-9 rad from below; `None` when link 1 cannot touch it.
+pub fn link1_band_half_rad(d_m: f64, r_m: f64) -> Option<f64> {
+    let rect = arm::geometry::OUTLINE
+        .iter()
+        .find(|(b, _)| *b == arm::geometry::Body::Link1)
+        .map(|(_, p)| *p)
+        .expect("link 1 in the outline");
+    let touches = |a: f64| rect.distance_m(d_m * a.cos(), d_m * a.sin()) <= r_m;
+    if !touches(0.0) {
+        return None;
+    }
+    // The distance grows with the angle away from the bearing (over [0, pi]).
+    let (mut lo, mut hi) = (0.0, PI);
+    if touches(hi) {
+        return Some(PI);
+    }
+    while hi - lo > 1e-9 {
+        let mid = 0.5 * (lo + hi);
+        if touches(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(lo)
+}
+
+/// When, if ever within `duration_s`, link 1 must touch one of `obstacles` whatever any
+/// controller does, for an arm starting at `start_theta1_rad`: link 1's contact with a disk
+/// depends on theta1 alone (a band of theta1 about the disk's bearing,
+/// [`link1_band_half_rad`]), so the arm's theta1 cannot leave the gap between bands it
+/// starts in, and a gap that two bands close (a faster disk catching a slower one round the
+/// shoulder) leaves no way out. Computed generously for the arm: it may be anywhere in a
+/// free gap at once (any speed), and reach every gap within [`TRAP_SLACK_RAD`] of the gaps
+/// it could be in a step of [`TRAP_DT_S`] before (gaps split, merge and close as bands
+/// pass). `Some(t)` only when even that arm has no gap left at time t: a collision no reflex
+/// can prevent.
+pub fn link1_trapped_s(
+    start_theta1_rad: f64,
+    obstacles: &[Obstacle],
+    duration_s: f64,
+) -> Option<f64> {
+    // Intervals of theta1 as (start in [0, 2 pi), length), counter-clockwise.
+    let wrap = |a: f64| a.rem_euclid(TAU);
+    let meet = |a: (f64, f64), b: (f64, f64)| wrap(b.0 - a.0) <= a.1 || wrap(a.0 - b.0) <= b.1;
+    let mut reach = vec![(wrap(start_theta1_rad), 0.0)];
+    let mut bands: Vec<(f64, f64)> = Vec::new();
+    let steps = (duration_s / TRAP_DT_S).ceil() as usize;
+    for k in 0..=steps {
+        let t = k as f64 * TRAP_DT_S;
+        bands.clear();
+        for o in obstacles {
+            let d = o.at(t);
+            if let Some(half) = link1_band_half_rad(d.x_m.hypot(d.y_m), d.r_m) {
+                if 2.0 * half >= TAU {
+                    return Some(t);
+                }
+                bands.push((wrap(d.y_m.atan2(d.x_m) - half), 2.0 * half));
+            }
+        }
+        if bands.is_empty() {
+            reach = vec![(0.0, TAU)]; // no band: anywhere
+            continue;
+        }
+        // Merge the bands round the circle, then the gaps between them.
+        bands.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut merged: Vec<(f64, f64)> = Vec::new();
+        for &(s, l) in &bands {
+            match merged.last_mut() {
+                Some(m) if s <= m.0 + m.1 => m.1 = m.1.max(s + l - m.0),
+                _ => merged.push((s, l)),
+            }
+        }
+        // The last may reach round past the first.
+        while merged.len() > 1 {
+            let (first, last) = (merged[0], merged[merged.len() - 1]);
+            if last.0 + last.1 >= first.0 + TAU {
+                let end = (first.0 + first.1 + TAU).max(last.0 + last.1);
+                merged.pop();
+                merged[0] = (last.0, end - last.0);
+            } else {
+                break;
+            }
+        }
+        if merged.len() == 1 && merged[0].1 >= TAU {
+            return Some(t);
+        }
+        let n = merged.len();
+        let gaps = (0..n).filter_map(|i| {
+            let end = merged[i].0 + merged[i].1;
+            let next = merged[(i + 1) % n].0 + if i + 1 == n { TAU } else { 0.0 };
+            (next > end).then(|| (wrap(end), next - end))
+        });
+        let slack = |r: (f64, f64)| (wrap(r.0 - TRAP_SLACK_RAD), r.1 + 2.0 * TRAP_SLACK_RAD);
+        let next: Vec<(f64, f64)> = gaps
+            .filter(|&g| reach.iter().any(|&r| meet(slack(r), g)))
+            .collect();
+        if next.is_empty() {
+            return Some(t);
+        }
+        reach = next;
+    }
+    None
+}
+
 /// What one scene did.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SceneResult {
@@ -184,6 +310,9 @@ pub struct SceneResult {
     /// conservativeness around the arm, under motion too; the exact oracle of
     /// `cspace_oracle`).
     pub unmarked_ms: u32,
+    /// When link 1 must touch a disk whatever any controller does, s ([`link1_trapped_s`]),
+    /// if within the scene.
+    pub trapped_s: Option<f64>,
 }
 
 /// Whether a pixel of the arm's 3 x 3 neighbourhood at absolute angles (`a`, `b`) holds a
@@ -257,6 +386,11 @@ pub fn run_scene(s: &Scene) -> SceneResult {
         escape_ms,
         hold_ms,
         unmarked_ms,
+        trapped_s: link1_trapped_s(
+            s.config.start_rad[0],
+            &s.config.obstacles,
+            s.config.duration_s,
+        ),
     }
 }
 
@@ -295,6 +429,11 @@ pub struct Summary {
     pub unmarked_ms: u64,
     /// Indices of the scenes with collisions.
     pub collision_scenes: Vec<u64>,
+    /// Scenes in which link 1 must touch a disk whatever any controller does (its start
+    /// between two bands of theta1 that close, [`link1_trapped_s`]).
+    pub scenes_trapped: u64,
+    /// Those of [`Self::collision_scenes`] that are such scenes.
+    pub collision_scenes_trapped: Vec<u64>,
     /// Wall-clock seconds.
     pub wall_s: f64,
 }
@@ -400,7 +539,14 @@ pub fn campaign(
         scenes_with_holds: results.iter().filter(|r| r.hold_ms > 0).count() as u64,
         scenes_unmarked_near_arm: results.iter().filter(|r| r.unmarked_ms > 0).count() as u64,
         unmarked_ms: results.iter().map(|r| r.unmarked_ms as u64).sum(),
+        collision_scenes_trapped: hits
+            .scenes
+            .iter()
+            .copied()
+            .filter(|&i| results[i as usize].trapped_s.is_some())
+            .collect(),
         collision_scenes: hits.scenes,
+        scenes_trapped: results.iter().filter(|r| r.trapped_s.is_some()).count() as u64,
         wall_s: start.elapsed().as_secs_f64(),
     };
     (summary, results)
@@ -480,12 +626,12 @@ pub fn run_to_dir(
     let (summary, results) = campaign(kind, seed, n, threads, progress);
     write_summary(out, &summary)?;
     let mut csv = String::from(
-        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms,unmarked_ms\n",
+        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms,unmarked_ms,trapped_s\n",
     );
     for r in &results {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}",
             r.index,
             r.collisions,
             r.min_clearance_m,
@@ -494,7 +640,8 @@ pub fn run_to_dir(
             r.stalled as u8,
             r.escape_ms,
             r.hold_ms,
-            r.unmarked_ms
+            r.unmarked_ms,
+            r.trapped_s.map_or(String::new(), |t| t.to_string())
         );
     }
     std::fs::write(out.join("scenes.csv"), csv).map_err(io)?;
@@ -512,6 +659,62 @@ pub fn run_to_dir(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Link 1's band is the rectangle's half-width plus the radius seen from the shoulder
+    /// (asin) while the disk's centre is along the rectangle; out of reach, none.
+    #[test]
+    fn link_1_bands_match_the_rectangle() {
+        for (d, r) in [(0.12f64, 0.01f64), (0.2, 0.035), (0.26, 0.02)] {
+            let want = ((0.019 + r) / d).asin();
+            let got = link1_band_half_rad(d, r).expect("within reach");
+            assert!((got - want).abs() < 1e-8, "d {d} r {r}: {got} vs {want}");
+        }
+        assert_eq!(link1_band_half_rad(0.40, 0.035), None);
+        assert!(link1_band_half_rad(0.30, 0.035).is_some()); // past the end, within r
+    }
+
+    /// Two disks in link 1's reach circling the shoulder at different speeds: an arm
+    /// starting in the gap the faster one closes is trapped when the bands meet (never
+    /// before, and within 1.6 ms of the analytic time); one
+    /// starting in the other gap, which only grows, is never trapped; nor is any arm when
+    /// the second disk is out of link 1's reach.
+    #[test]
+    fn the_trap_oracle_finds_gaps_that_close_and_only_those() {
+        let disk = |a: f64, d: f64, w: f64| Obstacle {
+            start: Disk {
+                x_m: d * a.cos(),
+                y_m: d * a.sin(),
+                r_m: 0.02,
+            },
+            motion: Motion::Circle {
+                cx_m: 0.0,
+                cy_m: 0.0,
+                period_s: TAU / w,
+            },
+        };
+        // Disk A at bearing a0 turning at 1.4 rad/s, B 1 rad ahead turning at 0.4 rad/s (a0
+        // also puts the bands across the seam at +-pi).
+        for a0 in [0.0, 2.7, -3.6] {
+            let config = |start: f64, db: f64| Config {
+                duration_s: 4.0,
+                start_rad: [a0 + start, 0.0],
+                obstacles: vec![disk(a0, 0.2, 1.4), disk(a0 + 1.0, db, 0.4)],
+                ..Config::default()
+            };
+            let half = link1_band_half_rad(0.2, 0.02).unwrap();
+            let closes = (1.0 - 2.0 * half) / (1.4 - 0.4);
+            let trapped = |c: Config| link1_trapped_s(c.start_rad[0], &c.obstacles, c.duration_s);
+            let t = trapped(config(0.5, 0.2)).expect("the gap closes");
+            // Never before the bands meet, and late by at most the slack (1 mrad at a
+            // closing speed of 1 rad/s: 1 ms) and a step.
+            assert!(
+                t >= closes && t <= closes + 0.0016,
+                "a0 {a0}: {t} vs {closes}"
+            );
+            assert_eq!(trapped(config(-2.0, 0.2)), None, "a0 {a0}");
+            assert_eq!(trapped(config(0.5, 0.45)), None, "a0 {a0}");
+        }
+    }
 
     /// The campaign's map check finds a pixel next to the arm that holds a collision while
     /// the map is blank, and none once the map marks the arm's neighbourhood; a disk far
