@@ -319,6 +319,34 @@ fn the_square_root_table_interpolates_to_within_one_of_the_floor() {
     );
 }
 
+/// `__fx_mul_floor_shr24` (fx::mul_floor_shr24, the reflex's urad-to-angle-unit
+/// conversion) against the host's on the edges and random pairs.
+#[test]
+fn the_floor_multiply_matches_the_host_bit_for_bit() {
+    let mut f = any_routine("__fx_mul_floor_shr24");
+    let mut rng = sim_host::sim::Rng::new(13);
+    let edges = [
+        0,
+        1,
+        -1,
+        87_496,
+        1 << 23,
+        -(1 << 23),
+        1 << 24,
+        i32::MAX,
+        i32::MIN,
+    ];
+    let mut pairs: Vec<(i32, i32)> = edges
+        .iter()
+        .flat_map(|&a| edges.iter().map(move |&b| (a, b)))
+        .collect();
+    pairs.extend((0..2000).map(|_| (rng.next_u64() as i32, rng.next_u64() as i32)));
+    pairs.extend((0..2000).map(|_| ((rng.next_u64() as i32) >> 4, 87_496)));
+    for (a, b) in pairs {
+        assert_eq!(f(&[a, b]), fx::host_mul_floor_shr24(a, b), "{a} * {b}");
+    }
+}
+
 #[test]
 fn the_fixed_point_square_root_matches_the_host_bit_for_bit() {
     let mut f = any_routine("__fx_sqrt_q16");

@@ -49,6 +49,31 @@ pub fn mul_shr(a: i32, b: i32, sh: u32) -> i32 {
     }
 }
 
+/// floor((a * b) / 2^24), the low 32 bits (the caller keeps the result within `i32`): one
+/// 64-bit `MULS.L` on the 68020 (`__fx_mul_floor_shr24`; compiled, an `i64` product is a
+/// `__muldi3` call).
+#[inline(always)]
+pub fn mul_floor_shr24(a: i32, b: i32) -> i32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __fx_mul_floor_shr24(a: i32, b: i32) -> i32;
+        }
+        // SAFETY: a pure function in the runtime's assembly, linked into every image.
+        unsafe { __fx_mul_floor_shr24(a, b) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        host_mul_floor_shr24(a, b)
+    }
+}
+
+/// The host implementation of [`mul_floor_shr24`] (the reference the image's is tested
+/// against).
+pub const fn host_mul_floor_shr24(a: i32, b: i32) -> i32 {
+    ((a as i64 * b as i64) >> 24) as i32
+}
+
 /// (num * 2^sh) / den truncated toward zero, saturated to `i32`; `sh` in 0..=31. A zero
 /// `den` saturates toward the sign of `num` (`i32::MAX` for 0).
 #[inline]
@@ -183,6 +208,15 @@ mod tests {
     }
 
     use super::*;
+
+    #[test]
+    fn floor_multiply_floors_toward_minus_infinity() {
+        assert_eq!(host_mul_floor_shr24(3, 1 << 23), 1); // 1.5
+        assert_eq!(host_mul_floor_shr24(-3, 1 << 23), -2); // -1.5
+        assert_eq!(host_mul_floor_shr24(-1, 1), -1);
+        assert_eq!(host_mul_floor_shr24(i32::MAX, 1 << 24), i32::MAX);
+        assert_eq!(host_mul_floor_shr24(i32::MIN, 87_496), -11_199_488);
+    }
 
     #[test]
     fn rounds_and_saturates() {

@@ -545,6 +545,15 @@ proptest! {
 }
 
 proptest! {
+    /// The one-product conversion gives what the split one (two 32-bit products of the
+    /// angle's halves, used until 2026-11-25) gave, over +-16 turns, where that one held.
+    #[test]
+    fn angle_units_match_the_split_product_conversion(a in -100_000_000i32..100_000_000) {
+        let hi = (a >> 12) * 87_496;
+        let lo = ((a & 0xFFF) * 87_496) >> 12;
+        prop_assert_eq!(urad_to_u(a), (hi + lo) >> 12);
+    }
+
     #[test]
     fn angle_units_are_within_one_of_exact(a in -25_000_000i32..25_000_000) {
         let exact = a as f64 * 32768.0 / (2.0 * std::f64::consts::PI * 1e6);

@@ -218,6 +218,19 @@ __fx_mul_shr\sh:
     MULSHR_FN 28
     MULSHR_FN 32
 
+/* i32 __fx_mul_floor_shr24(i32 a, i32 b): floor(a * b / 2^24), the low 32 bits
+ * (fx::mul_floor_shr24): the 64-bit product's bits 24-55. */
+    .section .text.__fx_mul_floor_shr24, "ax"
+    .globl __fx_mul_floor_shr24
+__fx_mul_floor_shr24:
+    move.l  4(%sp), %d0
+    muls.l  8(%sp), %d1:%d0
+    lsl.l   #8, %d1             /* the high word's low 24 bits up */
+    rol.l   #8, %d0             /* the low word's top byte down */
+    move.b  %d0, %d1
+    move.l  %d1, %d0
+    rts
+
 /* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
