@@ -1022,9 +1022,10 @@ servo_pass_body:
     .equ ENC_LATCH, 1
     .equ AMP_BOTH, 3
 
-/* Q16_TO_URAD r, t, u: r = servo::q16_to_urad(r): 15 r + (265 r + 512) >> 10 within
- * +-2^22, else mul_shr(r, 10^6, 16) (out of line); t, u scratch data registers. */
-.macro Q16_TO_URAD r, t, u
+/* Q16_TO_URAD r, t, u, ten: r = servo::q16_to_urad(r): 15 r + (265 r + 512) >> 10 within
+ * +-2^22, else mul_shr(r, 10^6, 16) (out of line); t, u scratch data registers, ten a data
+ * register holding 10. */
+.macro Q16_TO_URAD r, t, u, ten
     move.l  \r, \t
     addi.l  #0x400000, \t
     cmpi.l  #0x800000, \t
@@ -1038,8 +1039,7 @@ servo_pass_body:
     lsl.l   #3, \r
     add.l   \u, \r              /* 265 r */
     addi.l  #512, \r
-    asr.l   #8, \r
-    asr.l   #2, \r
+    asr.l   \ten, \r             /* one barrel shift: 6 cycles, two by 8 and 2 take 12 */
     add.l   \t, \r
 .Lqd\@:
     .subsection 1
@@ -1123,9 +1123,10 @@ __servo_board_pass:
     lea     -40(%sp), %sp
     movea.l %sp, %a1
     lea     B_OUT+F_THETA(%a2), %a0 /* theta, omega, arrest: six words in a row */
+    moveq   #10, %d3
     .rept 6
     move.l  (%a0)+, %d0
-    Q16_TO_URAD %d0, %d1, %d2
+    Q16_TO_URAD %d0, %d1, %d2, %d3
     move.l  %d0, (%a1)+
     .endr
     move.l  (%a0)+, %d0         /* the torques */

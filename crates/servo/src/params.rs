@@ -362,8 +362,8 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
 }
 
 /// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its
-/// common pass takes 6,046 cycles at rest, 6,779 on the braking curve (a square root a
-/// link) and 5,986 holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host
+/// common pass takes 5,997 cycles at rest, 6,739 on the braking curve (a square root a
+/// link) and 5,955 holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host
 /// profile servo`, `--servo-goal-urad`; docs/servo.md). 3 kHz leaves 5,566.
 pub const IMAGE_HZ: f64 = 2400.0;
 
