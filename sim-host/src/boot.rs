@@ -259,7 +259,8 @@ const WARM_UP_QUARTERS: u32 = 800;
 /// function (nearest symbol at or below the PC) it belongs to.
 ///
 /// The servo board gets what it gets in the running system: a reflex subgoal (`subgoal`; the
-/// arm's resting angles, 0 and 0, keep it at rest) published every 0.25 ms with a new cycle,
+/// arm's resting angles, 0 and 0, keep it at rest) published about every 0.25 ms (not in
+/// step with the board's loop) with a new cycle,
 /// from power-up on (without it every pass is a hold waiting for a first subgoal); with
 /// `subgoal.freeze_after_ms`, the cycle stops changing that long into the profile, as when
 /// the reflex dies: 20 ms later the servo holds.
@@ -349,11 +350,11 @@ pub fn profile(
     let start = b.cycles;
     let end = start + (ms * CPU_HZ as f64 / 1000.0) as u64;
     let mut next_feed = start + quarter_ms;
-    // The servo's paced pass is exactly two feed periods long (1000 timer ticks, 8,350
-    // cycles), so a feed at fixed instants can lock onto the few cycles in which the
-    // board reads the subgoal record and tear most of its reads (55% of the passes at rest
-    // in one build). The reflex publishes on its own clock: the intervals between the
-    // servo's feeds vary by up to +-1/8 ms about 0.25 ms (a fixed LCG: the same every run).
+    // Feeds at fixed instants can lock onto the few cycles in which the servo board reads
+    // the subgoal record when its paced pass is a multiple of the feed period (at 2,000 Hz
+    // exactly two, 8,350 cycles: 55% of the passes at rest read the record torn in one
+    // build). The reflex publishes on its own clock: the intervals between the servo's
+    // feeds vary by up to +-1/8 ms about 0.25 ms (a fixed LCG: the same every run).
     let mut lcg: u32 = 1;
     let mut wander = || {
         lcg = lcg.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);

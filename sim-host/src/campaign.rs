@@ -180,7 +180,9 @@ const TRAP_SLACK_RAD: f64 = 0.001;
 /// [`arm::geometry::OUTLINE`]) touches a disk of radius `r_m` whose centre is `d_m` from the
 /// shoulder, whatever theta2: the largest angle between the link and the disk's bearing at
 /// which the rectangle is within `r_m` of the centre (the collision oracle's contact,
-/// clearance <= 0), to 1e-9 rad from below; `None` when link 1 cannot touch it.
+/// clearance <= 0), to 1e-9 rad from below; `None` when link 1 does not touch it pointing
+/// at its centre (a disk just past the link's end that only its corners reach is left out:
+/// a narrower band, which only makes [`link1_trapped_s`] more generous to the arm).
 pub fn link1_band_half_rad(d_m: f64, r_m: f64) -> Option<f64> {
     let rect = arm::geometry::OUTLINE
         .iter()
@@ -191,7 +193,9 @@ pub fn link1_band_half_rad(d_m: f64, r_m: f64) -> Option<f64> {
     if !touches(0.0) {
         return None;
     }
-    // The distance grows with the angle away from the bearing (over [0, pi]).
+    // Over [0, pi] the distance grows with the angle, or (centre past the link's end) falls
+    // to its least at the end's corner and grows after: either way the contact set is one
+    // interval from 0 once 0 is in it.
     let (mut lo, mut hi) = (0.0, PI);
     if touches(hi) {
         return Some(PI);
