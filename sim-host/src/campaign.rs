@@ -231,7 +231,13 @@ pub fn link1_trapped_s(
     let meet = |a: (f64, f64), b: (f64, f64)| wrap(b.0 - a.0) <= a.1 || wrap(a.0 - b.0) <= b.1;
     let mut reach = vec![(wrap(start_theta1_rad), 0.0)];
     let mut bands: Vec<(f64, f64)> = Vec::new();
-    let steps = (duration_s / TRAP_DT_S).ceil() as usize;
+    // Bands that never move never close a gap: the first step alone tells.
+    let fixed = obstacles.iter().all(|o| o.motion == Motion::Static);
+    let steps = if fixed {
+        0
+    } else {
+        (duration_s / TRAP_DT_S).ceil() as usize
+    };
     for k in 0..=steps {
         let t = k as f64 * TRAP_DT_S;
         bands.clear();
@@ -811,6 +817,13 @@ mod tests {
                 period_s: TAU / w,
             },
         };
+        // Disks at rest: trapped at once in a band, never outside one.
+        let still = [Obstacle {
+            motion: Motion::Static,
+            ..disk(0.0, 0.2, 1.0)
+        }];
+        assert_eq!(link1_trapped_s(0.0, &still, 4.0), Some(0.0));
+        assert_eq!(link1_trapped_s(1.0, &still, 4.0), None);
         // Disk A at bearing a0 turning at 1.4 rad/s, B 1 rad ahead turning at 0.4 rad/s (a0
         // also puts the bands across the seam at +-pi).
         for a0 in [0.0, 2.7, -3.6] {
