@@ -617,6 +617,43 @@ pub fn report(out: &std::path::Path) -> Result<String, String> {
         );
     }
 
+    // The same steps with the image's constants at the image's rate (what the servo
+    // image runs): each settles, and how far it overshoots.
+    let image: Vec<(usize, f64, f64)> = sweep
+        .iter()
+        .filter(|s| s.3)
+        .map(|&(link, size, scale, _)| (link, size, scale))
+        .collect();
+    let ir = par_map(&image, |&(link, size, scale)| {
+        run(
+            Controller::ImageRate,
+            Step {
+                period_s: 1.0 / servo::params::IMAGE_HZ,
+                ..Step::new(link, size, scale, sweep_duration_s(link, size))
+            },
+        )
+    });
+    for link in 0..2 {
+        let (mut over, mut ratio, mut never, mut n) = (0.0f64, 0.0f64, 0, 0);
+        for (&(l, size, scale), r) in image.iter().zip(&ir) {
+            if l == link {
+                n += 1;
+                over = over.max(r.overshoot_rad);
+                match r.settle_s {
+                    Some(t) => ratio = ratio.max(t / ideal_s(link, size, scale)),
+                    None => never += 1,
+                }
+            }
+        }
+        let _ = writeln!(
+            o,
+            "  image-rate set at {:.0} Hz, link {}: {never} of {n} steps never within 2 counts, worst overshoot {:.3} mrad, worst time {ratio:.2} x ideal",
+            servo::params::IMAGE_HZ,
+            link + 1,
+            over * 1e3
+        );
+    }
+
     // The pictures, like figs. III.3-III.6 (0.5 s, as the thesis's), baselines overlaid.
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let names: Vec<String> = COMPARED.iter().map(|c| c.name()).collect();
