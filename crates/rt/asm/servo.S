@@ -108,12 +108,12 @@
  * fixed shift (8, 16, 17, 24, 28 or 32); b any data addressing mode, h a scratch data
  * register, t a scratch data or address register, z (optional) a scratch data register
  * for the rounding carry (MOVEQ and ADDX: faster than the branch without it). The 64-bit
- * product of MULS.L plus 2^(sh-1) fits in 32 bits after the shift when h lies in
- * [-2^(sh-33), 2^(sh-33)) (sh < 32); otherwise the sign of h says which way it saturates
- * (that branch is out of line). The check per shift, the cheapest found on the 68020:
- * 16, h equal to its low word sign-extended (MOVE.W, EXT.L or MOVEA.W, CMP); 24 and 28,
- * the V flag of ASL.L shifting h into place (set when a bit unlike the sign leaves it; t
- * keeps h for the sign); 8 and 17, h + 2^(sh-33) below 2^(sh-32) unsigned. */
+ * product of MULS.L plus 2^(sh-1), its high word h, fits in 32 bits after the shift when h
+ * lies in [-2^(sh-1), 2^(sh-1)) (sh < 32); otherwise the sign of h says which way it
+ * saturates (that branch is out of line). The check per shift, the cheapest found on the
+ * 68020: 16, h equal to its low word sign-extended (MOVE.W, EXT.L or MOVEA.W, CMP); 24 and
+ * 28, the V flag of ASL.L shifting h into place (set when a bit unlike the sign leaves it;
+ * t keeps h for the sign); 8 and 17, h + 2^(sh-1) below 2^sh unsigned. */
 .macro MULSHR a, b, sh, h, t, z
     muls.l  \b, \h:\a
 .if \sh == 32
