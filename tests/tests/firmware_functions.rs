@@ -282,10 +282,7 @@ fn the_square_root_table_interpolates_to_within_one_of_the_floor() {
         .symbol("__fx_sqrt_table")
         .expect("__fx_sqrt_table in the image");
     let t: Vec<u64> = (0..=768u32)
-        .map(|k| {
-            let a = (table + 4 * k) as usize;
-            u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]]) as u64
-        })
+        .map(|k| ram_word(&b, table + 4 * k) as u64)
         .collect();
     for (k, &v) in t.iter().enumerate() {
         let n = (256 + k as u128) << 38;
