@@ -343,14 +343,19 @@ pub fn trapped_s(start_rad: [f64; 2], obstacles: &[Obstacle], duration_s: f64) -
     };
     for step in 0..=steps {
         let t = step as f64 * TRAP2_DT_S;
-        let disks: Vec<Disk> = obstacles.iter().map(|o| o.at(t)).collect();
-        for (k, f) in free.iter_mut().enumerate() {
-            *f = disks.iter().all(|d| {
-                poses[k].clearance_m(&Disk {
+        // Each disk less the margin: a cell whose centre touches one is blocked all over.
+        let cores: Vec<Disk> = obstacles
+            .iter()
+            .map(|o| {
+                let d = o.at(t);
+                Disk {
                     r_m: d.r_m - margin,
-                    ..*d
-                }) > 0.0
-            });
+                    ..d
+                }
+            })
+            .collect();
+        for (k, f) in free.iter_mut().enumerate() {
+            *f = cores.iter().all(|d| poses[k].clearance_m(d) > 0.0);
         }
         // Seeds: free cells within one cell of where the arm could be; then their runs.
         seen.iter_mut().for_each(|x| *x = false);
@@ -404,9 +409,6 @@ pub struct SceneResult {
     /// conservativeness around the arm, under motion too; the exact oracle of
     /// `cspace_oracle`).
     pub unmarked_ms: u32,
-    /// When link 1 must touch a disk whatever any controller does, s ([`link1_trapped_s`]),
-    /// if within the scene.
-    pub trapped_s: Option<f64>,
 }
 
 /// Whether a pixel of the arm's 3 x 3 neighbourhood at absolute angles (`a`, `b`) holds a
@@ -480,11 +482,6 @@ pub fn run_scene(s: &Scene) -> SceneResult {
         escape_ms,
         hold_ms,
         unmarked_ms,
-        trapped_s: link1_trapped_s(
-            s.config.start_rad[0],
-            &s.config.obstacles,
-            s.config.duration_s,
-        ),
     }
 }
 
@@ -523,11 +520,6 @@ pub struct Summary {
     pub unmarked_ms: u64,
     /// Indices of the scenes with collisions.
     pub collision_scenes: Vec<u64>,
-    /// Scenes in which link 1 must touch a disk whatever any controller does (its start
-    /// between two bands of theta1 that close, [`link1_trapped_s`]).
-    pub scenes_trapped: u64,
-    /// Those of [`Self::collision_scenes`] that are such scenes.
-    pub collision_scenes_trapped: Vec<u64>,
     /// Those of [`Self::collision_scenes`] in which the arm must touch a disk whatever any
     /// controller does by the grid over both angles ([`trapped_s`], asked of these scenes
     /// only): the contacts a reflex could not have prevented.
@@ -649,15 +641,8 @@ pub fn campaign(
         scenes_with_holds: results.iter().filter(|r| r.hold_ms > 0).count() as u64,
         scenes_unmarked_near_arm: results.iter().filter(|r| r.unmarked_ms > 0).count() as u64,
         unmarked_ms: results.iter().map(|r| r.unmarked_ms as u64).sum(),
-        collision_scenes_trapped: hits
-            .scenes
-            .iter()
-            .copied()
-            .filter(|&i| results[i as usize].trapped_s.is_some())
-            .collect(),
         collision_scenes_unwinnable: unwinnable,
         collision_scenes: hits.scenes,
-        scenes_trapped: results.iter().filter(|r| r.trapped_s.is_some()).count() as u64,
         wall_s: start.elapsed().as_secs_f64(),
     };
     (summary, results)
@@ -737,12 +722,12 @@ pub fn run_to_dir(
     let (summary, results) = campaign(kind, seed, n, threads, progress);
     write_summary(out, &summary)?;
     let mut csv = String::from(
-        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms,unmarked_ms,trapped_s\n",
+        "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms,unmarked_ms\n",
     );
     for r in &results {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             r.index,
             r.collisions,
             r.min_clearance_m,
@@ -751,8 +736,7 @@ pub fn run_to_dir(
             r.stalled as u8,
             r.escape_ms,
             r.hold_ms,
-            r.unmarked_ms,
-            r.trapped_s.map_or(String::new(), |t| t.to_string())
+            r.unmarked_ms
         );
     }
     std::fs::write(out.join("scenes.csv"), csv).map_err(io)?;

@@ -361,7 +361,6 @@ fn main() -> ExitCode {
                         );
                         if !s.collision_scenes.is_empty() {
                             println!("  scenes with collisions: {:?} (replay: sim-host run {}/collision-<i>.toml)", s.collision_scenes, dir.display());
-                            println!("  of them, link 1 trapped between closing bands (no controller avoids the contact): {:?}; {} such scenes in all", s.collision_scenes_trapped, s.scenes_trapped);
                             println!("  of them, the arm trapped in both angles (no controller avoids the contact): {:?}", s.collision_scenes_unwinnable);
                             any = true;
                         }
