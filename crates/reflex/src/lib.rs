@@ -27,9 +27,11 @@
 //!   along that axis only (V.11: one binding axis per obstacle), while the other axis goes on.
 //! * **Braking.** If margins grown with speed reach an obstacle, the subgoal is kept within
 //!   the arrest region itself: the servo brakes, the margins shrink, growth resumes.
-//! * **Escape** (fig. V.10). If an obstacle covers the arm or its arrest region (it moved in,
-//!   or the arm started inside), the subgoal is the nearest free place, the one nearest the
-//!   goal among equals.
+//! * **Escape** (fig. V.10, extended in [`escape`]). If an obstacle covers the arm's
+//!   neighbourhood or its arrest region (it moved in, or the arm started inside), the arm
+//!   heads for the most open free place it can reach without crossing marked pixels (across
+//!   the fewest, when an obstacle that moves has come onto it), a step at a time along the
+//!   way there.
 //! * **Stall.** At rest, short of the goal, with the subgoal stuck for [`STALL_US`]: flagged
 //!   for the planner (ch. VI).
 //! * **Fail-safe** ([`health`]): a stale, torn or lagging map, stale obstacle positions, a
@@ -45,6 +47,7 @@
 /// The arrest points of the last passes, to hold at the one of the moment an input went
 /// quiet (the servo's log, keyed here by the servo's published time, us).
 pub use servo::arrest_log;
+pub mod escape;
 pub mod goal;
 pub mod health;
 pub mod masks;
@@ -92,11 +95,11 @@ pub const ARREST_SLACK_SHIFT: u32 = 2;
 pub const DEPTH_PX: i32 = 8;
 /// Most pixel words read while growing the window per pass.
 pub const GROW_BUDGET: u32 = 1024;
-/// Escape search radius, pixels.
-pub const ESCAPE_PX: i32 = 20;
-/// Farthest an escape subgoal lies from the arm, each axis, angle units (1.5 pixels).
+/// Farthest an escape subgoal lies from the arm, each axis, angle units (1.5 pixels; the
+/// escape's step is at most [`escape::STEP_PX`] pixels away).
 pub const ESCAPE_STEP_U: i32 = 384;
-/// Free pixels around an escape target, each side (more among moving obstacles).
+/// Free pixels around an escape target, each side, that the escape looks for (more among
+/// moving obstacles; at most [`escape::LEVELS`] - 1).
 pub const ESCAPE_CLEAR_PX: i32 = 1;
 /// Among moving obstacles: the time the arm needs to react to one (the map's refresh and
 /// the servo's first move), over which the arm keeps the distance an obstacle border covers
@@ -298,6 +301,8 @@ pub struct Reflex {
     pass: u32,
     /// The escape target of the previous pass (unwrapped pixels).
     escape_to: Option<[i32; 2]>,
+    /// The escape's bitmaps.
+    scratch: escape::Scratch,
     /// The wand position the goal was last computed from.
     wand_um: [i32; 2],
     /// The arrest points of the last passes: a hold for an input that went quiet holds at
@@ -336,6 +341,7 @@ impl Reflex {
             braked_pass: 0,
             pass: 0,
             escape_to: None,
+            scratch: escape::Scratch::new(),
             wand_um: [0; 2],
             log: arrest_log::ArrestLog::new(),
         }
@@ -639,12 +645,13 @@ impl Reflex {
         out.subgoal_urad = Some(sub);
     }
 
-    /// Where to escape to from pixel `at`: the target of the previous pass while it and the
-    /// way to it stay free (a target that changed each pass made the arm dither between two
-    /// ways out; one kept after obstacles closed the way led the arm into them), else the
-    /// nearest free block of `clear` pixels each side, the one nearest `toward` among
-    /// equals, reached by a free rectangle; across marked pixels only among `moving`
-    /// obstacles.
+    /// Where to escape to from pixel `at` ([`escape`]): the first step toward the most open
+    /// free place reachable without crossing marked pixels (across them, fewest first, only
+    /// among `moving` obstacles with the arm's own pixel marked: with every obstacle at
+    /// rest, the arm got where it is through free space or started there, so it is safe
+    /// where it stands, and a dash across the map's marks is not; planner campaign seed 1
+    /// scene 618: an arm started 10 mm from a disk, in a one-pixel free sliver, crossed the
+    /// disk), with `clear` free pixels each side at most, nearest `toward` among equals.
     #[inline(never)]
     fn escape<M: Map + ?Sized>(
         &mut self,
@@ -655,51 +662,16 @@ impl Reflex {
         moving: bool,
         tests: &mut u32,
     ) -> Option<[i32; 2]> {
-        let here1 = Span {
-            lo: at[0],
-            hi: at[0],
+        let ask = escape::Ask {
+            at,
+            toward,
+            clear,
+            cross: moving,
+            prev: self.escape_to,
         };
-        let here2 = Span {
-            lo: at[1],
-            hi: at[1],
-        };
-        let inside = !window::rect_free(map, here1, here2, tests);
-        // The previous target while it and the way to it stay free.
-        if let Some(q) = self.escape_to {
-            if window::clear_at(map, at, q, ESCAPE_CLEAR_PX, true, inside, tests) {
-                return Some(q);
-            }
-        }
-        // Back off along a free rectangle to a block with the full clearance, or the narrow
-        // one if none is near. When the map marks the arm's own pixel (its conservative
-        // margin, or an obstacle that came on), the rectangle starts at the arm's neighbour
-        // toward the block, so the way out never crosses the obstacle; only if there is no
-        // such way does the arm take the nearest narrow block regardless (fig. V.10).
-        let e = |m: &mut M, clear: i32, direct: bool, tests: &mut u32| {
-            let s = window::Escape {
-                at,
-                toward,
-                max_r: ESCAPE_PX,
-                clear,
-                direct,
-                from_next: inside,
-            };
-            window::escape(m, &s, tests)
-        };
-        let mut q = e(map, clear, true, tests);
-        if q.is_none() && clear > ESCAPE_CLEAR_PX {
-            q = e(map, ESCAPE_CLEAR_PX, true, tests);
-        }
-        // Across marked pixels only when an obstacle may have come onto the arm: with every
-        // obstacle at rest, the arm got where it is through free space or started there, so
-        // it is safe where it stands, and a dash across the map's marks (its conservative
-        // margins, or a real obstacle) is not (planner campaign seed 1 scene 618: an arm
-        // started 10 mm from a disk, in a one-pixel free sliver, crossed the disk).
-        if q.is_none() && moving {
-            q = e(map, ESCAPE_CLEAR_PX, false, tests);
-        }
-        self.escape_to = q;
-        q
+        let p = escape::plan(map, &mut self.scratch, &ask, tests);
+        self.escape_to = p.map(|p| p.target);
+        p.map(|p| p.step)
     }
 
     /// The stall, at-goal and arrived flags for subgoal `sub`: at rest, short of the goal,

@@ -37,6 +37,26 @@ pub trait Map {
         }
         bits
     }
+    /// Bit `k` set when pixel (`i1 + k` mod 128, `i2`) is marked, `k` < 32, any `i1` < 128:
+    /// a row of the escape's window (`crate::escape`). The default joins two aligned
+    /// [`Map::row_bits`] words.
+    fn row_run(&mut self, i2: u32, i1: u32) -> u32 {
+        let w0 = i1 & !31;
+        join(
+            self.row_bits(i2, w0),
+            self.row_bits(i2, (w0 + 32) & (SIDE - 1)),
+            i1 & 31,
+        )
+    }
+    /// Bit `k` set when stripe `i1 + k` mod 128 is marked, `k` < 32, any `i1` < 128.
+    fn stripe_run(&mut self, i1: u32) -> u32 {
+        let w0 = i1 & !31;
+        join(
+            self.stripe_bits(w0),
+            self.stripe_bits((w0 + 32) & (SIDE - 1)),
+            i1 & 31,
+        )
+    }
     /// Bit `k` set when stripe `i1 + k` is marked, `k` < 32 (`i1` a multiple of 32).
     fn stripe_bits(&mut self, i1: u32) -> u32 {
         let mut bits = 0;
@@ -78,6 +98,33 @@ impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
         self.0
             .nonzero_bits(vme_map::layout::CSPACE_STRIPES + 4 * i1)
     }
+    // 32 words from any pixel: one call of 32 words when the run does not wrap (the
+    // aligned pair of the default reads 64).
+    fn row_run(&mut self, i2: u32, i1: u32) -> u32 {
+        if i1 <= SIDE - 32 {
+            return self
+                .0
+                .nonzero_bits(vme_map::layout::cspace_counter(i1, i2, 0));
+        }
+        let w0 = i1 & !31;
+        join(self.row_bits(i2, w0), self.row_bits(i2, 0), i1 & 31)
+    }
+    fn stripe_run(&mut self, i1: u32) -> u32 {
+        if i1 <= SIDE - 32 {
+            return self
+                .0
+                .nonzero_bits(vme_map::layout::CSPACE_STRIPES + 4 * i1);
+        }
+        let w0 = i1 & !31;
+        join(self.stripe_bits(w0), self.stripe_bits(0), i1 & 31)
+    }
+}
+
+/// Bits `sh ..` of `a` followed by `b`'s low bits: a 32-pixel run starting `sh` pixels into
+/// aligned word `a` (never a shift by 32).
+#[inline(always)]
+fn join(a: u32, b: u32, sh: u32) -> u32 {
+    (a >> sh) | ((b << 1) << (31 - sh))
 }
 
 /// A map held in plain slices: 128 x 128 words (row `i2` after row `i2 - 1`) and 128
@@ -291,110 +338,4 @@ fn step<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, ax: usize, tests
         w.window[ax].lo = next;
     }
     0
-}
-
-/// Point `d` along side `side` (0 bottom, 1 top, 2 left, 3 right) of the ring of radius `r`
-/// around `at`.
-#[inline(never)]
-fn ring(at: [i32; 2], r: i32, d: i32, side: u32) -> [i32; 2] {
-    match side {
-        0 => [at[0] + d, at[1] - r],
-        1 => [at[0] + d, at[1] + r],
-        2 => [at[0] - r, at[1] + d],
-        _ => [at[0] + r, at[1] + d],
-    }
-}
-
-/// Whether the block of `clear` pixels around `q` is free, and with `direct` the rectangle
-/// from `at` (with `from_next`, from `at`'s neighbour toward `q`) to `q` too.
-#[inline(never)]
-pub fn clear_at<M: Map + ?Sized>(
-    m: &mut M,
-    at: [i32; 2],
-    q: [i32; 2],
-    clear: i32,
-    direct: bool,
-    from_next: bool,
-    tests: &mut u32,
-) -> bool {
-    let s1 = Span {
-        lo: q[0] - clear,
-        hi: q[0] + clear,
-    };
-    let s2 = Span {
-        lo: q[1] - clear,
-        hi: q[1] + clear,
-    };
-    if !rect_free(m, s1, s2, tests) {
-        return false;
-    }
-    if !direct {
-        return true;
-    }
-    use crate::masks::{max, min};
-    // From the arm's own pixel, or (when `from_next`: the arm's pixel is marked) from its
-    // neighbour toward `q`, so the way out does not cross the obstacle it is in.
-    let sgn = |d: i32| (d >> 31) | ((-d as u32) >> 31) as i32;
-    let from = [
-        at[0] + (sgn(q[0] - at[0]) & -(from_next as i32)),
-        at[1] + (sgn(q[1] - at[1]) & -(from_next as i32)),
-    ];
-    let p1 = Span {
-        lo: min(q[0], from[0]),
-        hi: max(q[0], from[0]),
-    };
-    let p2 = Span {
-        lo: min(q[1], from[1]),
-        hi: max(q[1], from[1]),
-    };
-    rect_free(m, p1, p2, tests)
-}
-
-/// An escape search (fig. V.10): from the arm's pixel `at`, the nearest pixel (Chebyshev
-/// rings out to `max_r`) whose block of (2 `clear` + 1)^2 pixels is free, the one nearest
-/// `toward` among equals. With `direct`, the rectangle between `at` (with `from_next`,
-/// `at`'s neighbour toward the pixel) and the pixel must be free too (the way there must not
-/// cross an obstacle, each link moving on its own).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Escape {
-    /// The arm's pixel.
-    pub at: [i32; 2],
-    /// The goal's pixel (ties go toward it).
-    pub toward: [i32; 2],
-    /// Largest ring searched.
-    pub max_r: i32,
-    /// Free pixels each side of the target.
-    pub clear: i32,
-    /// The way there must be free.
-    pub direct: bool,
-    /// The way is checked from the arm's neighbour (the arm's own pixel is marked).
-    pub from_next: bool,
-}
-
-/// Runs the search `e`. `None` if there is no such pixel within reach.
-pub fn escape<M: Map + ?Sized>(m: &mut M, e: &Escape, tests: &mut u32) -> Option<[i32; 2]> {
-    let mut r = 1;
-    while r <= e.max_r {
-        let mut best = [0; 2];
-        let mut best_dist = i32::MAX;
-        let mut d = -r;
-        while d <= r {
-            let mut side = 0;
-            while side < 4 {
-                let q = ring(e.at, r, d, side);
-                let dist = (q[0] - e.toward[0]).abs() + (q[1] - e.toward[1]).abs();
-                if dist < best_dist && clear_at(m, e.at, q, e.clear, e.direct, e.from_next, tests) {
-                    best = q;
-                    best_dist = dist;
-                }
-                side += 1;
-            }
-            d += 1;
-        }
-        if best_dist != i32::MAX {
-            return Some(best);
-        }
-        r += 1;
-    }
-    None
 }
