@@ -61,7 +61,8 @@ fn script(global: &mut [u8], n: usize) -> Vec<u32> {
         [(p[0] as f64 + 0.5) * px, (p[1] as f64 + 0.5) * px]
     };
     for k in 0..n {
-        if k == n * 6 / 10 {
+        // Into the obstacle at the start of phase 6 and every 40 passes of it.
+        if k == n * 6 / 10 || (k * 10 / n == 6 && k % 40 == 0) {
             th = inside;
             w = [0.0; 2];
         }
@@ -120,7 +121,10 @@ fn script(global: &mut [u8], n: usize) -> Vec<u32> {
         } else {
             k as u32 / 2
         };
-        words[17] = (k % 97 == 0) as u32;
+        // Obstacles flagged moving while the arm sits inside one (every other 40 passes of
+        // phase 6): the escape may cross marked pixels.
+        let moving = phase == 6 && (k / 40) % 2 == 0;
+        words[17] = (k % 97 == 0) as u32 | (moving as u32) << 1;
         for e in 0..6 {
             let b = 18 + 4 * e;
             words[b] = if phase == 5 && e == 2 && k % 100 > 60 {
@@ -236,6 +240,142 @@ fn the_reflex_image_steps_like_the_host() {
             "the script never raised fault {code}"
         );
     }
+}
+
+/// The escape planner (`reflex::escape`) on the image against the host, plan for plan, on a
+/// map of overlapping disks: arms inside obstacles, on their borders, in the open and near
+/// the torus edges; with and without crossing marks, each clearance, with and without a
+/// previous target. Prints the image's cycles per plan.
+#[test]
+fn the_reflex_images_escapes_match_the_host() {
+    use reflex::script::{scripted_escape, ESCAPE_IN_WORDS, ESCAPE_OUT_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = global_with(&[
+        (300, 300, 30),
+        (-200, 350, 25),
+        (100, -380, 40),
+        (330, 250, 20),
+        (-420, -60, 35),
+    ]);
+    let marked = |g: &mut [u8], i1: i32, i2: i32| {
+        use vme_map::GlobalBus;
+        ArrayBus::new(g).read_u32(vme_map::layout::cspace_counter(
+            (i1 & 127) as u32,
+            (i2 & 127) as u32,
+            0,
+        )) != 0
+    };
+    let mut rng = Rng::new(11);
+    let n = 600;
+    let mut asks = Vec::new();
+    let (mut inside, mut border) = (0, 0);
+    while asks.len() < n * ESCAPE_IN_WORDS {
+        let at = [
+            (rng.next_u64() % 128) as i32 - 64,
+            (rng.next_u64() % 128) as i32,
+        ];
+        let here = marked(&mut global, at[0], at[1]);
+        let near = (-3..=3).any(|a| (-3..=3).any(|b| marked(&mut global, at[0] + a, at[1] + b)));
+        // Mostly arms with marks around (the escape's business), a few in the open.
+        if !near && !rng.next_u64().is_multiple_of(8) {
+            continue;
+        }
+        inside += here as u32;
+        border += (near && !here) as u32;
+        let mut r = |m: u64| (rng.next_u64() % m) as i32;
+        let toward = [at[0] + r(41) - 20, at[1] + r(41) - 20];
+        let prev = [at[0] + r(9) - 4, at[1] + r(9) - 4];
+        asks.extend_from_slice(&[
+            at[0],
+            at[1],
+            toward[0],
+            toward[1],
+            r(5),
+            r(2),
+            r(2),
+            prev[0],
+            prev[1],
+        ]);
+    }
+    assert!(
+        inside > 100 && border > 100,
+        "{inside} inside, {border} on borders"
+    );
+    let mut s = reflex::escape::Scratch::new();
+    let host: Vec<[i32; ESCAPE_OUT_WORDS]> = asks
+        .chunks(ESCAPE_IN_WORDS)
+        .map(|w| {
+            let mut o = [0; ESCAPE_OUT_WORDS];
+            scripted_escape(
+                &mut s,
+                w.try_into().unwrap(),
+                &mut reflex::window::BusMap(&mut ArrayBus::new(&mut global)),
+                &mut o,
+            );
+            o
+        })
+        .collect();
+    let crossed = host.iter().filter(|o| o[0] == 1 && o[6] > 0).count();
+    let none = host.iter().filter(|o| o[0] == 0).count();
+    assert!(crossed > 20, "only {crossed} plans crossed marks");
+    let mut b = EmuBoard::new(
+        BoardId::Reflex,
+        &img,
+        sim_host::devices::standalone(BoardId::Reflex),
+        &mut global,
+    );
+    let f = img
+        .symbol("reflex_probe_escape")
+        .expect("reflex_probe_escape in the image");
+    for (k, w) in asks.iter().enumerate() {
+        let a = (BUF + 4 * k as u32) as usize;
+        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    }
+    // A call a plan, for each plan's cycles (the scratch bitmaps carry nothing over).
+    let mut cycles = Vec::new();
+    for i in 0..n as u32 {
+        let (ret, c) = b
+            .call(
+                &mut global,
+                f,
+                &[
+                    BUF + 4 * ESCAPE_IN_WORDS as u32 * i,
+                    1,
+                    OUT + 4 * ESCAPE_OUT_WORDS as u32 * i,
+                ],
+                100_000_000,
+            )
+            .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
+        assert_eq!(ret, 0);
+        cycles.push(c);
+    }
+    for (i, h) in host.iter().enumerate() {
+        let got: Vec<i32> = (0..ESCAPE_OUT_WORDS)
+            .map(|k| {
+                let a = (OUT + 4 * (ESCAPE_OUT_WORDS * i + k) as u32) as usize;
+                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+            })
+            .collect();
+        assert_eq!(
+            got,
+            h.to_vec(),
+            "plan {i}: {:?}",
+            &asks[i * ESCAPE_IN_WORDS..][..ESCAPE_IN_WORDS]
+        );
+    }
+    let mean = cycles.iter().sum::<u64>() / n as u64;
+    let (worst, wi) = cycles
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| (c, i))
+        .max()
+        .unwrap();
+    eprintln!(
+        "{n} escape plans ({inside} inside, {border} on borders, {crossed} crossed marks, \
+         {none} none): {mean} cycles a plan on average, {worst} at most (plan {wi}: {:?} -> {:?})",
+        &asks[wi * ESCAPE_IN_WORDS..][..ESCAPE_IN_WORDS],
+        host[wi]
+    );
 }
 
 /// The safety campaign (issue 8): zero collisions in 2,000 random static scenes with the

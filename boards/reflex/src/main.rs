@@ -48,6 +48,35 @@ pub extern "C" fn reflex_probe_run(inputs: *const u32, n: u32, out: *mut i32) ->
     0
 }
 
+/// Test probe (never called by the board): plans `n` escapes
+/// (`reflex::script::ESCAPE_IN_WORDS` words each) on the C-space map in global RAM and
+/// writes `reflex::script::ESCAPE_OUT_WORDS` words per plan to `out`. The system tests
+/// compare it with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_escape"]
+pub extern "C" fn reflex_probe_escape(asks: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{ESCAPE_IN_WORDS, ESCAPE_OUT_WORDS};
+    static mut SCRATCH: reflex::escape::Scratch = reflex::escape::Scratch::new();
+    // SAFETY: the probe is the only code that touches SCRATCH, and runs once per call.
+    let s = unsafe { &mut *core::ptr::addr_of_mut!(SCRATCH) };
+    // SAFETY: the probe runs on the reflex image, where global RAM is mapped.
+    let mut g = unsafe { MmioGlobal::new() };
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes ESCAPE_IN_WORDS n input words and room for
+        // ESCAPE_OUT_WORDS n outputs, word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(asks.add(ESCAPE_IN_WORDS * i as usize) as *const [i32; ESCAPE_IN_WORDS]),
+                &mut *(out.add(ESCAPE_OUT_WORDS * i as usize) as *mut [i32; ESCAPE_OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_escape(s, w, &mut reflex::window::BusMap(&mut g), o);
+        i += 1;
+    }
+    0
+}
+
 fn safe_stop() {
     // SAFETY: called by the runtime on this board, where the private I/O is mapped.
     board_reflex::safe(&mut unsafe { MmioIo::new() });

@@ -117,3 +117,40 @@ pub fn fault_code(f: Fault) -> i32 {
         Fault::Input(Problem::ObjectsStale) => 7,
     }
 }
+
+/// Words of one escape question ([`scripted_escape`]): arm pixel (2), goal pixel (2),
+/// clearance wanted, may cross (0/1), previous target present (0/1) and its pixel (2).
+pub const ESCAPE_IN_WORDS: usize = 9;
+/// Words of one escape answer: found (0/1), target (2), step (2), clearance, rings crossed.
+pub const ESCAPE_OUT_WORDS: usize = 7;
+
+/// Plans one escape ([`crate::escape::plan`]) from the words `w` on `map` with the bitmaps
+/// `s`; writes `out`. For the image's probe `reflex_probe_escape` and the system tests.
+#[inline(never)]
+pub fn scripted_escape<M: Map + ?Sized>(
+    s: &mut crate::escape::Scratch,
+    w: &[i32; ESCAPE_IN_WORDS],
+    map: &mut M,
+    out: &mut [i32; ESCAPE_OUT_WORDS],
+) {
+    let ask = crate::escape::Ask {
+        at: [w[0], w[1]],
+        toward: [w[2], w[3]],
+        clear: w[4],
+        cross: w[5] != 0,
+        prev: (w[6] != 0).then_some([w[7], w[8]]),
+    };
+    let mut tests = 0;
+    *out = [0; ESCAPE_OUT_WORDS];
+    if let Some(p) = crate::escape::plan(map, s, &ask, &mut tests) {
+        *out = [
+            1,
+            p.target[0],
+            p.target[1],
+            p.step[0],
+            p.step[1],
+            p.clear,
+            p.crossed as i32,
+        ];
+    }
+}
