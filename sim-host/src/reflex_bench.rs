@@ -104,18 +104,30 @@ impl Feed {
     }
 }
 
-/// Runs the reflex image for `ms` with the arm at `theta` turning at `omega` (held there:
-/// each pass sees the same state, as the case is defined), obstacle disks `disks` (x, y, r
-/// in mm) drawn in the map and the wand at `wand` (mm).
-fn image_case(
-    dir: &Path,
+/// What a case holds the reflex image's inputs at.
+struct Spec {
     name: &'static str,
+    /// Link angles, rad.
     theta: [f64; 2],
+    /// Link speeds, rad/s.
     omega: [f64; 2],
-    disks: &[(i32, i32, i32)],
-    wand: (i32, i32),
-    ms: f64,
-) -> Result<ImageCase, String> {
+    /// Obstacle disks (x, y, r in mm) drawn in the map.
+    disks: &'static [(i32, i32, i32)],
+    /// The sensing board flags the obstacles moving.
+    moving: bool,
+}
+
+/// Runs the reflex image for `ms` with the arm at `c.theta` turning at `c.omega` (held
+/// there: each pass sees the same state, as the case is defined), `c`'s obstacles in the map
+/// and the wand at `wand` (mm).
+fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCase, String> {
+    let Spec {
+        name,
+        theta,
+        omega,
+        disks,
+        moving,
+    } = *c;
     let mut sys = System::power_up(dir, &[BoardId::Reflex]).map_err(|e| e.to_string())?;
     let mut table = ObjectTable::default();
     {
@@ -128,7 +140,8 @@ fn image_case(
                 x_um: x * 1000,
                 y_um: y * 1000,
                 t_us: 0,
-                flags: beacon_flags::VALID,
+                flags: beacon_flags::VALID
+                    | (beacon_flags::MOVING & (moving as u32).wrapping_neg()),
             };
             // The entry as a C-space board leaves it after drawing the obstacle.
             let base = vme_map::layout::work_entry(i as u32);
@@ -210,33 +223,61 @@ const CLUTTER: [(i32, i32, i32); 4] = [
 /// The image cases (module docs).
 pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
     // (name, angles, speeds, obstacles)
-    type Case = (&'static str, [f64; 2], [f64; 2], &'static [(i32, i32, i32)]);
-    let cases: [Case; 4] = [
-        ("at rest, free space", [0.3, 0.4], [0.0, 0.0], &[]),
-        (
-            "fig. V.5: 42 ms of full acceleration (11.5, 40.3 rad/s)",
-            [0.3, 0.4],
-            [11.5, 40.3],
-            &[],
-        ),
-        (
-            "top speed (29, 55 rad/s): arrest region 32 x 32 pixels",
-            [0.3, 0.4],
-            [29.0, 55.0],
-            &[],
-        ),
-        (
-            "among 4 obstacles, moving (5, 10 rad/s)",
-            [2.0, -0.5],
-            [5.0, 10.0],
-            &CLUTTER,
-        ),
+    // The arm's tip on the first clutter disk's centre (inside its image: the escape
+    // crosses marks) and 15 mm off its edge (within a moving obstacle's reach: the escape
+    // floods the free pixels around).
+    let tip_at = |x_mm: i32, y_mm: i32| {
+        crate::sensing_cal::ik(x_mm as f64 * 1e-3, y_mm as f64 * 1e-3).expect("within reach")
+    };
+    let (cx, cy, cr) = CLUTTER[0];
+    let still = [0.0, 0.0];
+    let cases = [
+        Spec {
+            name: "at rest, free space",
+            theta: [0.3, 0.4],
+            omega: still,
+            disks: &[],
+            moving: false,
+        },
+        Spec {
+            name: "fig. V.5: 42 ms of full acceleration (11.5, 40.3 rad/s)",
+            theta: [0.3, 0.4],
+            omega: [11.5, 40.3],
+            disks: &[],
+            moving: false,
+        },
+        Spec {
+            name: "top speed (29, 55 rad/s): arrest region 32 x 32 pixels",
+            theta: [0.3, 0.4],
+            omega: [29.0, 55.0],
+            disks: &[],
+            moving: false,
+        },
+        Spec {
+            name: "among 4 obstacles, moving (5, 10 rad/s)",
+            theta: [2.0, -0.5],
+            omega: [5.0, 10.0],
+            disks: &CLUTTER,
+            moving: false,
+        },
+        Spec {
+            name: "escaping: the arm inside a moving obstacle, at rest",
+            theta: tip_at(cx, cy),
+            omega: still,
+            disks: &CLUTTER,
+            moving: true,
+        },
+        Spec {
+            name: "escaping: the arm 15 mm off a moving obstacle, at rest",
+            theta: tip_at(cx, cy + cr + 15),
+            omega: still,
+            disks: &CLUTTER,
+            moving: true,
+        },
     ];
     cases
         .iter()
-        .map(|&(name, theta, omega, disks)| {
-            image_case(dir, name, theta, omega, disks, (-300, 200), 900.0)
-        })
+        .map(|c| image_case(dir, c, (-300, 200), 900.0))
         .collect()
 }
 
