@@ -200,6 +200,12 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
         .is_some_and(|f| f != vme_map::FaultCode::None)
     {
         "servo (hold at the arrest point)".to_string()
+    } else if stopped && faults.is_empty() {
+        // No layer holds and no board recorded a fault: the arm is short of the goal
+        // because the reflex keeps it off an obstacle (a moving one may stand between), as
+        // it would without the fault; where it happens to be at the run's end decides
+        // nothing about the fault.
+        "none needed (carried on; at rest short of the goal, kept off an obstacle)".to_string()
     } else if stopped {
         "reflex and servo (stopped short of an obstacle or the goal)".to_string()
     } else {
