@@ -16,6 +16,35 @@ const BUF: u32 = 0x0002_0000;
 /// Scratch RAM for the probe's results: above the data and bss, far below the stack.
 const OUT: u32 = 0x0009_0000;
 
+/// The reflex image on a standalone board over `global`, its probe `name`'s address, and
+/// `words` written to its RAM at [`BUF`].
+fn probe_board(img: &Image, global: &mut [u8], name: &str, words: &[u32]) -> (EmuBoard, u32) {
+    let mut b = EmuBoard::new(
+        BoardId::Reflex,
+        img,
+        sim_host::devices::standalone(BoardId::Reflex),
+        global,
+    );
+    let f = img
+        .symbol(name)
+        .unwrap_or_else(|| panic!("{name} in the image"));
+    for (k, w) in words.iter().enumerate() {
+        let a = (BUF + 4 * k as u32) as usize;
+        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    }
+    (b, f)
+}
+
+/// `n` words of the board's RAM from `addr`.
+fn ram_words(b: &EmuBoard, addr: u32, n: usize) -> Vec<i32> {
+    (0..n)
+        .map(|k| {
+            let a = addr as usize + 4 * k;
+            i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
+        })
+        .collect()
+}
+
 /// Global RAM with a C-space map of `disks` (x mm, y mm, r mm) drawn by the C-space logic.
 fn global_with(disks: &[(i32, i32, i32)]) -> Vec<u8> {
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
@@ -181,32 +210,15 @@ fn the_reflex_image_steps_like_the_host() {
     assert!(BUF as usize + 4 * IN_WORDS * n <= 0x8_0000);
     let inputs = script(&mut global, n);
     let host = host_run(&mut global, &inputs);
-    let mut b = EmuBoard::new(
-        BoardId::Reflex,
-        &img,
-        sim_host::devices::standalone(BoardId::Reflex),
-        &mut global,
-    );
-    let f = img
-        .symbol("reflex_probe_run")
-        .expect("reflex_probe_run in the image");
+    let (mut b, f) = probe_board(&img, &mut global, "reflex_probe_run", &inputs);
     let out = OUT;
-    for (k, w) in inputs.iter().enumerate() {
-        let a = (BUF + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
-    }
     let (ret, cycles) = b
         .call(&mut global, f, &[BUF, n as u32, out], 4_000_000_000)
         .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
     assert_eq!(ret, 0);
     let mut seen = std::collections::BTreeMap::new();
     for (i, h) in host.iter().enumerate() {
-        let got: Vec<i32> = (0..OUT_WORDS)
-            .map(|k| {
-                let a = (out + 4 * (OUT_WORDS * i + k) as u32) as usize;
-                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-            })
-            .collect();
+        let got = ram_words(&b, out + 4 * (OUT_WORDS * i) as u32, OUT_WORDS);
         assert_eq!(got, h.to_vec(), "pass {i}");
         for bit in 0..11 {
             if h[3] & (1 << bit) != 0 {
@@ -318,19 +330,8 @@ fn the_reflex_images_escapes_match_the_host() {
     let crossed = host.iter().filter(|o| o[0] == 1 && o[6] > 0).count();
     let none = host.iter().filter(|o| o[0] == 0).count();
     assert!(crossed > 20, "only {crossed} plans crossed marks");
-    let mut b = EmuBoard::new(
-        BoardId::Reflex,
-        &img,
-        sim_host::devices::standalone(BoardId::Reflex),
-        &mut global,
-    );
-    let f = img
-        .symbol("reflex_probe_escape")
-        .expect("reflex_probe_escape in the image");
-    for (k, w) in asks.iter().enumerate() {
-        let a = (BUF + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
-    }
+    let words: Vec<u32> = asks.iter().map(|&w| w as u32).collect();
+    let (mut b, f) = probe_board(&img, &mut global, "reflex_probe_escape", &words);
     // A call a plan, for each plan's cycles (the scratch bitmaps carry nothing over).
     let mut cycles = Vec::new();
     for i in 0..n as u32 {
@@ -350,12 +351,11 @@ fn the_reflex_images_escapes_match_the_host() {
         cycles.push(c);
     }
     for (i, h) in host.iter().enumerate() {
-        let got: Vec<i32> = (0..ESCAPE_OUT_WORDS)
-            .map(|k| {
-                let a = (OUT + 4 * (ESCAPE_OUT_WORDS * i + k) as u32) as usize;
-                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-            })
-            .collect();
+        let got = ram_words(
+            &b,
+            OUT + 4 * (ESCAPE_OUT_WORDS * i) as u32,
+            ESCAPE_OUT_WORDS,
+        );
         assert_eq!(
             got,
             h.to_vec(),

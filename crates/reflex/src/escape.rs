@@ -490,53 +490,13 @@ fn rect_reached(s: &Scratch, q: [i32; 2]) -> i32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::window::SliceMap;
+    use crate::tests::TestMap;
     use proptest::prelude::*;
 
-    /// A 128 x 128 map.
-    struct TestMap {
-        words: Vec<u32>,
-        stripes: Vec<u32>,
-    }
-
-    impl TestMap {
-        fn new() -> Self {
-            Self {
-                words: vec![0; 128 * 128],
-                stripes: vec![0; 128],
-            }
-        }
-        fn mark(&mut self, i1: i32, i2: i32) {
-            self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] = 1;
-        }
-        /// Marks i1 in a..=b, i2 in c..=d (wrapping).
-        fn block(&mut self, a: i32, b: i32, c: i32, d: i32) {
-            for i1 in a..=b {
-                for i2 in c..=d {
-                    self.mark(i1, i2);
-                }
-            }
-        }
-        fn clear_px(&mut self, i1: i32, i2: i32) {
-            self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] = 0;
-        }
-        fn marked(&self, i1: i32, i2: i32) -> bool {
-            self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] != 0
-                || self.stripes[(i1 & 127) as usize] != 0
-        }
-        fn plan(&self, ask: &Ask) -> Option<Plan> {
-            let mut s = Scratch::new();
-            let mut tests = 0;
-            plan(
-                &mut SliceMap {
-                    words: &self.words,
-                    stripes: &self.stripes,
-                },
-                &mut s,
-                ask,
-                &mut tests,
-            )
-        }
+    /// Plans on `m` with fresh bitmaps.
+    fn plan_on(m: &TestMap, ask: &Ask) -> Option<Plan> {
+        let mut tests = 0;
+        plan(&mut m.map(), &mut Scratch::new(), ask, &mut tests)
     }
 
     fn ask(at: [i32; 2], toward: [i32; 2], clear: i32, cross: bool) -> Ask {
@@ -553,7 +513,7 @@ mod tests {
     fn an_arm_in_the_open_stays_where_it_is() {
         let mut m = TestMap::new();
         m.block(40, 44, 40, 70);
-        let p = m.plan(&ask([60, 60], [100, 60], 4, true)).unwrap();
+        let p = plan_on(&m, &ask([60, 60], [100, 60], 4, true)).unwrap();
         assert_eq!(
             (p.target, p.step, p.clear, p.crossed),
             ([60, 60], [60, 60], 4, 0)
@@ -569,7 +529,7 @@ mod tests {
         for i2 in 50..=60 {
             m.clear_px(60, i2);
         }
-        let p = m.plan(&ask([60, 60], [70, 70], 2, false)).unwrap();
+        let p = plan_on(&m, &ask([60, 60], [70, 70], 2, false)).unwrap();
         assert_eq!(p.crossed, 0);
         assert_eq!(p.clear, 2);
         // Out of the crack's mouth (row 49) and two pixels clear of the mass.
@@ -588,8 +548,8 @@ mod tests {
         let mut m = TestMap::new();
         m.block(0, 127, 50, 58);
         let inside = [64, 56];
-        assert_eq!(m.plan(&ask(inside, [64, 30], 1, false)), None);
-        let p = m.plan(&ask(inside, [64, 30], 1, true)).unwrap();
+        assert_eq!(plan_on(&m, &ask(inside, [64, 30], 1, false)), None);
+        let p = plan_on(&m, &ask(inside, [64, 30], 1, true)).unwrap();
         // Out through the top (rows 57 and 58), though the goal lies below (6 rings).
         assert_eq!(p.crossed, 2, "{p:?}");
         assert!(p.target[1] >= 60 && p.target[0] == 64, "{p:?}");
@@ -621,7 +581,7 @@ mod tests {
                 m.clear_px(i1, i2);
             }
         }
-        let p = m.plan(&ask([1, 126], [1, 150], 1, false)).unwrap();
+        let p = plan_on(&m, &ask([1, 126], [1, 150], 1, false)).unwrap();
         assert_eq!((p.clear, p.crossed), (1, 0), "{p:?}");
         // In the box, in unwrapped pixels.
         assert!((-5..=-3).contains(&p.target[0]), "{p:?}");
@@ -638,12 +598,12 @@ mod tests {
         m.mark(59, 60);
         m.mark(61, 60);
         let mut a = ask([60, 60], [60, 40], 1, false);
-        assert_eq!(m.plan(&a).unwrap().target, [60, 58]);
+        assert_eq!(plan_on(&m, &a).unwrap().target, [60, 58]);
         a.prev = Some([60, 62]);
-        assert_eq!(m.plan(&a).unwrap().target, [60, 62]);
+        assert_eq!(plan_on(&m, &a).unwrap().target, [60, 62]);
         // Not clear any more: dropped.
         m.mark(61, 63);
-        assert_eq!(m.plan(&a).unwrap().target, [60, 58]);
+        assert_eq!(plan_on(&m, &a).unwrap().target, [60, 58]);
     }
 
     /// The oracle: breadth-first search over the window (4-connected free pixels, at most
@@ -700,7 +660,7 @@ mod tests {
             }
             let at = [at.0, at.1];
             prop_assume!(!m.marked(at[0], at[1]));
-            let p = m.plan(&ask(at, [toward.0, toward.1], clear, true)).unwrap();
+            let p = plan_on(&m, &ask(at, [toward.0, toward.1], clear, true)).unwrap();
             let (best, d) = oracle(&m, at, clear).unwrap();
             prop_assert_eq!(p.clear, best);
             prop_assert_eq!(p.crossed, 0);

@@ -9,35 +9,45 @@ use window::SliceMap;
 
 const RAD: f64 = 1e6;
 
-/// A 128 x 128 map with its stripes.
-struct TestMap {
-    words: Vec<u32>,
-    stripes: Vec<u32>,
+/// A 128 x 128 map with its stripes (the escape's tests use it too).
+pub(crate) struct TestMap {
+    pub(crate) words: Vec<u32>,
+    pub(crate) stripes: Vec<u32>,
 }
 
 impl TestMap {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             words: vec![0; 128 * 128],
             stripes: vec![0; 128],
         }
     }
+    /// Marks pixel (i1, i2) (wrapping).
+    pub(crate) fn mark(&mut self, i1: i32, i2: i32) {
+        self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] = 0x0100_0000;
+    }
+    /// Clears pixel (i1, i2) (wrapping).
+    pub(crate) fn clear_px(&mut self, i1: i32, i2: i32) {
+        self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] = 0;
+    }
+    /// Whether pixel (i1, i2) is marked (wrapping).
+    pub(crate) fn marked(&self, i1: i32, i2: i32) -> bool {
+        self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] != 0
+            || self.stripes[(i1 & 127) as usize] != 0
+    }
     /// Marks pixels i1 in a..=b, i2 in c..=d (wrapping).
-    fn block(&mut self, a: i32, b: i32, c: i32, d: i32) {
+    pub(crate) fn block(&mut self, a: i32, b: i32, c: i32, d: i32) {
         for i1 in a..=b {
             for i2 in c..=d {
-                self.words[((i2 & 127) * 128 + (i1 & 127)) as usize] = 0x0100_0000;
+                self.mark(i1, i2);
             }
         }
     }
     fn occupied(&self, t1_rad: f64, t2_rad: f64) -> bool {
-        let p = |t: f64| {
-            ((t / (2.0 * std::f64::consts::PI) * 128.0).floor() as i64).rem_euclid(128) as usize
-        };
-        let (i1, i2) = (p(t1_rad), p(t2_rad));
-        self.words[i2 * 128 + i1] != 0 || self.stripes[i1] != 0
+        let p = |t: f64| (t / (2.0 * std::f64::consts::PI) * 128.0).floor() as i32;
+        self.marked(p(t1_rad), p(t2_rad))
     }
-    fn map(&self) -> SliceMap<'_> {
+    pub(crate) fn map(&self) -> SliceMap<'_> {
         SliceMap {
             words: &self.words,
             stripes: &self.stripes,
