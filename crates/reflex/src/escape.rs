@@ -97,11 +97,11 @@ impl Scratch {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
     /// The pixel heading for.
-    pub target: [i32; 2],
+    pub target_px: [i32; 2],
     /// The arm's neighbour (or its own pixel) to head for this pass.
-    pub step: [i32; 2],
+    pub step_px: [i32; 2],
     /// The target's clearance (free pixels each side).
-    pub clear: i32,
+    pub clear_px: i32,
     /// Rings of marked pixels crossed on the way.
     pub crossed: u32,
 }
@@ -110,15 +110,15 @@ pub struct Plan {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ask {
     /// The arm's pixel.
-    pub at: [i32; 2],
+    pub at_px: [i32; 2],
     /// The goal's pixel (ties go toward it).
-    pub toward: [i32; 2],
-    /// Clearance wanted (more is not better), at most `LEVELS - 1`.
-    pub clear: i32,
+    pub toward_px: [i32; 2],
+    /// Clearance wanted (free pixels each side; more is not better), at most `LEVELS - 1`.
+    pub clear_px: i32,
     /// Marked pixels may be crossed (obstacles move: one may have come onto the arm).
     pub cross: bool,
     /// The previous pass's target, kept while it is as good as the best.
-    pub prev: Option<[i32; 2]>,
+    pub prev_px: Option<[i32; 2]>,
 }
 
 /// Plans an escape (module docs). `None` when no free pixel is within reach (the arm holds).
@@ -130,8 +130,8 @@ pub fn plan<M: Map + ?Sized>(
     ask: &Ask,
     tests: &mut u32,
 ) -> Option<Plan> {
-    load(m, s, ask.at, tests);
-    let clear = ask.clear.clamp(0, LEVELS as i32 - 1);
+    load(m, s, ask.at_px, tests);
+    let clear = ask.clear_px.clamp(0, LEVELS as i32 - 1);
     let mut c = 1;
     while c <= clear {
         erode(s, c as usize);
@@ -141,9 +141,9 @@ pub fn plan<M: Map + ?Sized>(
     if k.best < 0 {
         return None;
     }
-    let origin = [ask.at[0] - HALF, ask.at[1] - HALF];
+    let origin = [ask.at_px[0] - HALF, ask.at_px[1] - HALF];
     // The previous target while it is among the best kind (reached, as clear).
-    let kept = ask.prev.is_some_and(|p| {
+    let kept = ask.prev_px.is_some_and(|p| {
         let (x, y) = (p[0] - origin[0], p[1] - origin[1]);
         let inside = (0..WIN as i32).contains(&x) && (0..WIN as i32).contains(&y);
         let keep = inside && keeps(s, x as usize, y as usize, k.best as usize);
@@ -151,13 +151,16 @@ pub fn plan<M: Map + ?Sized>(
         keep
     });
     if !kept {
-        nearest(s, [ask.toward[0] - origin[0], ask.toward[1] - origin[1]]);
+        nearest(
+            s,
+            [ask.toward_px[0] - origin[0], ask.toward_px[1] - origin[1]],
+        );
     }
     first_step(s);
     Some(Plan {
-        target: [origin[0] + s.t[0], origin[1] + s.t[1]],
-        step: [origin[0] + s.step[0], origin[1] + s.step[1]],
-        clear: k.best,
+        target_px: [origin[0] + s.t[0], origin[1] + s.t[1]],
+        step_px: [origin[0] + s.step[0], origin[1] + s.step[1]],
+        clear_px: k.best,
         crossed: k.crossed,
     })
 }
@@ -501,11 +504,11 @@ mod tests {
 
     fn ask(at: [i32; 2], toward: [i32; 2], clear: i32, cross: bool) -> Ask {
         Ask {
-            at,
-            toward,
-            clear,
+            at_px: at,
+            toward_px: toward,
+            clear_px: clear,
             cross,
-            prev: None,
+            prev_px: None,
         }
     }
 
@@ -515,7 +518,7 @@ mod tests {
         m.block(40, 44, 40, 70);
         let p = plan_on(&m, &ask([60, 60], [100, 60], 4, true)).unwrap();
         assert_eq!(
-            (p.target, p.step, p.clear, p.crossed),
+            (p.target_px, p.step_px, p.clear_px, p.crossed),
             ([60, 60], [60, 60], 4, 0)
         );
     }
@@ -531,13 +534,13 @@ mod tests {
         }
         let p = plan_on(&m, &ask([60, 60], [70, 70], 2, false)).unwrap();
         assert_eq!(p.crossed, 0);
-        assert_eq!(p.clear, 2);
+        assert_eq!(p.clear_px, 2);
         // Out of the crack's mouth (row 49) and two pixels clear of the mass.
-        assert!(p.target[1] <= 47, "{p:?}");
+        assert!(p.target_px[1] <= 47, "{p:?}");
         // The step runs down the crack, within STEP_PX.
-        assert_eq!(p.step[0], 60);
-        assert!((58..60).contains(&p.step[1]), "{p:?}");
-        for i2 in p.step[1]..=60 {
+        assert_eq!(p.step_px[0], 60);
+        assert!((58..60).contains(&p.step_px[1]), "{p:?}");
+        for i2 in p.step_px[1]..=60 {
             assert!(!m.marked(60, i2));
         }
     }
@@ -552,8 +555,8 @@ mod tests {
         let p = plan_on(&m, &ask(inside, [64, 30], 1, true)).unwrap();
         // Out through the top (rows 57 and 58), though the goal lies below (6 rings).
         assert_eq!(p.crossed, 2, "{p:?}");
-        assert!(p.target[1] >= 60 && p.target[0] == 64, "{p:?}");
-        assert!(p.step[1] > inside[1] && p.step[0] == 64, "{p:?}");
+        assert!(p.target_px[1] >= 60 && p.target_px[0] == 64, "{p:?}");
+        assert!(p.step_px[1] > inside[1] && p.step_px[0] == 64, "{p:?}");
     }
 
     #[test]
@@ -582,13 +585,13 @@ mod tests {
             }
         }
         let p = plan_on(&m, &ask([1, 126], [1, 150], 1, false)).unwrap();
-        assert_eq!((p.clear, p.crossed), (1, 0), "{p:?}");
+        assert_eq!((p.clear_px, p.crossed), (1, 0), "{p:?}");
         // In the box, in unwrapped pixels.
-        assert!((-5..=-3).contains(&p.target[0]), "{p:?}");
-        assert!((135..=139).contains(&p.target[1]), "{p:?}");
+        assert!((-5..=-3).contains(&p.target_px[0]), "{p:?}");
+        assert!((135..=139).contains(&p.target_px[1]), "{p:?}");
         // The first step along the corridor (left).
-        assert_eq!(p.step[1], 126, "{p:?}");
-        assert!(p.step[0] < 1, "{p:?}");
+        assert_eq!(p.step_px[1], 126, "{p:?}");
+        assert!(p.step_px[0] < 1, "{p:?}");
     }
 
     #[test]
@@ -598,12 +601,12 @@ mod tests {
         m.mark(59, 60);
         m.mark(61, 60);
         let mut a = ask([60, 60], [60, 40], 1, false);
-        assert_eq!(plan_on(&m, &a).unwrap().target, [60, 58]);
-        a.prev = Some([60, 62]);
-        assert_eq!(plan_on(&m, &a).unwrap().target, [60, 62]);
+        assert_eq!(plan_on(&m, &a).unwrap().target_px, [60, 58]);
+        a.prev_px = Some([60, 62]);
+        assert_eq!(plan_on(&m, &a).unwrap().target_px, [60, 62]);
         // Not clear any more: dropped.
         m.mark(61, 63);
-        assert_eq!(plan_on(&m, &a).unwrap().target, [60, 58]);
+        assert_eq!(plan_on(&m, &a).unwrap().target_px, [60, 58]);
     }
 
     /// The oracle: breadth-first search over the window (4-connected free pixels, at most
@@ -662,20 +665,20 @@ mod tests {
             prop_assume!(!m.marked(at[0], at[1]));
             let p = plan_on(&m, &ask(at, [toward.0, toward.1], clear, true)).unwrap();
             let (best, d) = oracle(&m, at, clear).unwrap();
-            prop_assert_eq!(p.clear, best);
+            prop_assert_eq!(p.clear_px, best);
             prop_assert_eq!(p.crossed, 0);
-            let t = [p.target[0] - at[0] + HALF, p.target[1] - at[1] + HALF];
+            let t = [p.target_px[0] - at[0] + HALF, p.target_px[1] - at[1] + HALF];
             let o = oracle_dist(&m, at, t);
-            prop_assert_eq!(o, Some(d), "target {:?} not among the nearest", p.target);
+            prop_assert_eq!(o, Some(d), "target {:?} not among the nearest", p.target_px);
             for a in -best..=best {
                 for b in -best..=best {
-                    prop_assert!(!m.marked(p.target[0] + a, p.target[1] + b));
+                    prop_assert!(!m.marked(p.target_px[0] + a, p.target_px[1] + b));
                 }
             }
-            prop_assert!((p.step[0] - at[0]).abs() <= STEP_PX && (p.step[1] - at[1]).abs() <= STEP_PX);
-            for x in at[0].min(p.step[0])..=at[0].max(p.step[0]) {
-                for y in at[1].min(p.step[1])..=at[1].max(p.step[1]) {
-                    prop_assert!(!m.marked(x, y), "step {:?} from {:?} sweeps ({}, {})", p.step, at, x, y);
+            prop_assert!((p.step_px[0] - at[0]).abs() <= STEP_PX && (p.step_px[1] - at[1]).abs() <= STEP_PX);
+            for x in at[0].min(p.step_px[0])..=at[0].max(p.step_px[0]) {
+                for y in at[1].min(p.step_px[1])..=at[1].max(p.step_px[1]) {
+                    prop_assert!(!m.marked(x, y), "step {:?} from {:?} sweeps ({}, {})", p.step_px, at, x, y);
                 }
             }
         }

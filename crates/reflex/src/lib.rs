@@ -663,15 +663,15 @@ impl Reflex {
         tests: &mut u32,
     ) -> Option<[i32; 2]> {
         let ask = escape::Ask {
-            at,
-            toward,
-            clear,
+            at_px: at,
+            toward_px: toward,
+            clear_px: clear,
             cross: moving,
-            prev: self.escape_to,
+            prev_px: self.escape_to,
         };
         let p = escape::plan(map, &mut self.scratch, &ask, tests);
-        self.escape_to = p.map(|p| p.target);
-        p.map(|p| p.step)
+        self.escape_to = p.map(|p| p.target_px);
+        p.map(|p| p.step_px)
     }
 
     /// The stall, at-goal and arrived flags for subgoal `sub`: at rest, short of the goal,

@@ -134,22 +134,22 @@ pub fn scripted_escape<M: Map + ?Sized>(
     out: &mut [i32; ESCAPE_OUT_WORDS],
 ) {
     let ask = crate::escape::Ask {
-        at: [w[0], w[1]],
-        toward: [w[2], w[3]],
-        clear: w[4],
+        at_px: [w[0], w[1]],
+        toward_px: [w[2], w[3]],
+        clear_px: w[4],
         cross: w[5] != 0,
-        prev: (w[6] != 0).then_some([w[7], w[8]]),
+        prev_px: (w[6] != 0).then_some([w[7], w[8]]),
     };
     let mut tests = 0;
     *out = [0; ESCAPE_OUT_WORDS];
     if let Some(p) = crate::escape::plan(map, s, &ask, &mut tests) {
         *out = [
             1,
-            p.target[0],
-            p.target[1],
-            p.step[0],
-            p.step[1],
-            p.clear,
+            p.target_px[0],
+            p.target_px[1],
+            p.step_px[0],
+            p.step_px[1],
+            p.clear_px,
             p.crossed as i32,
         ];
     }
