@@ -231,7 +231,7 @@ fn flood(s: &mut Scratch, clear: i32, cross: bool) -> Found {
         crossed: 0,
     };
     // The arm's own pixel (layer 0, stashed in `next`) is a candidate when free.
-    let mut better = next_level(s, found.best, clear) as u32;
+    let mut better = level_any(s, 0);
     let mut crossed = 0;
     let mut steps = 0;
     loop {
@@ -263,16 +263,16 @@ fn flood(s: &mut Scratch, clear: i32, cross: bool) -> Found {
 
 /// One 4-connected step of `reach` (into free pixels only with `free_only`), in place over
 /// rows `lo - 1 ..= hi + 1` (then the band), the new pixels stashed in `next`. Returns
-/// nonzero when a new pixel is clearer than `best` (level `best + 1`; [`best_level`] finds
-/// how much); sets `grew`.
+/// nonzero when a new pixel is clearer than `best` (level `best + 1`, below `LEVELS`: the
+/// flood steps only while `best` is short of the clearance wanted; [`best_level`] finds how
+/// much); sets `grew`.
 #[inline(never)]
 fn step(s: &mut Scratch, free_only: bool, best: i32) -> u32 {
     let any_pixel = !(free_only as u32).wrapping_neg();
     let lo = max(s.lo - 1, 0);
     let hi = min(s.hi + 1, WIN as i32 - 1);
-    // The level a new pixel must reach to beat `best` (a level past the last never is).
-    let lvl = &s.free[min(best + 1, LEVELS as i32 - 1) as usize];
-    let never = lt(LEVELS as i32 - 2, best) as u32;
+    // The level a new pixel must reach to beat `best`.
+    let lvl = &s.free[(best + 1) as usize];
     let mut above = s.reach[lo as usize];
     let mut grew = 0;
     let mut better = 0;
@@ -297,7 +297,7 @@ fn step(s: &mut Scratch, free_only: bool, best: i32) -> u32 {
     s.next_lo = lo as usize;
     s.next_hi = hi as usize;
     s.grew = grew;
-    better & !never
+    better
 }
 
 /// Whether a pixel of the last step's new pixels (`next`, band `next_lo ..= next_hi`) has
@@ -311,15 +311,6 @@ fn level_any(s: &Scratch, c: usize) -> u32 {
         r += 1;
     }
     any
-}
-
-/// Nonzero when the last step's new pixels beat `best` (up to `clear`).
-#[inline(never)]
-fn next_level(s: &Scratch, best: i32, clear: i32) -> i32 {
-    let c = best + 1;
-    // -1 when c <= clear.
-    let ok = !lt(clear, c);
-    ok & ((level_any(s, min(c, clear) as usize) != 0) as i32).wrapping_neg()
 }
 
 /// The highest clearance (up to `clear`) among the last step's new pixels, known to beat
@@ -609,29 +600,22 @@ mod tests {
         assert_eq!(plan_on(&m, &a).unwrap().target_px, [60, 58]);
     }
 
-    /// The oracle: breadth-first search over the window (4-connected free pixels, at most
-    /// MAX_STEPS steps), the clearance of a pixel its largest free block within the window.
-    fn oracle(m: &TestMap, at: [i32; 2], clear: i32) -> Option<(i32, u32)> {
+    /// Whether window pixel (`x`, `y`) of the window around `at` is inside it and free.
+    fn window_free(m: &TestMap, at: [i32; 2], x: i32, y: i32) -> bool {
         let w = WIN as i32;
-        let inside = |x: i32, y: i32| (0..w).contains(&x) && (0..w).contains(&y);
-        let free = |x: i32, y: i32| inside(x, y) && !m.marked(at[0] - HALF + x, at[1] - HALF + y);
-        let cl = |x: i32, y: i32| {
-            (0..=clear)
-                .take_while(|&c| (-c..=c).all(|a| (-c..=c).all(|b| free(x + a, y + b))))
-                .last()
-        };
+        (0..w).contains(&x) && (0..w).contains(&y) && !m.marked(at[0] - HALF + x, at[1] - HALF + y)
+    }
+
+    /// Steps from the window's centre to each window pixel (`u32::MAX`: not reached) through
+    /// free pixels, 4-connected, at most MAX_STEPS.
+    fn bfs(m: &TestMap, at: [i32; 2]) -> Vec<u32> {
+        let free = |x: i32, y: i32| window_free(m, at, x, y);
         let mut dist = vec![u32::MAX; WIN * WIN];
         let mut q = std::collections::VecDeque::new();
         dist[HALF as usize * WIN + HALF as usize] = 0;
         q.push_back((HALF, HALF));
-        let mut best: Option<(i32, u32)> = None;
         while let Some((x, y)) = q.pop_front() {
             let d = dist[y as usize * WIN + x as usize];
-            if let Some(c) = cl(x, y) {
-                if best.is_none_or(|(bc, _)| c > bc) {
-                    best = Some((c, d));
-                }
-            }
             if d >= MAX_STEPS {
                 continue;
             }
@@ -639,6 +623,31 @@ mod tests {
                 if free(nx, ny) && dist[ny as usize * WIN + nx as usize] == u32::MAX {
                     dist[ny as usize * WIN + nx as usize] = d + 1;
                     q.push_back((nx, ny));
+                }
+            }
+        }
+        dist
+    }
+
+    /// The oracle: the best clearance among the pixels [`bfs`] reaches (a pixel's clearance
+    /// its largest free block within the window, up to `clear`) and the fewest steps to it.
+    fn oracle(m: &TestMap, at: [i32; 2], dist: &[u32], clear: i32) -> Option<(i32, u32)> {
+        let w = WIN as i32;
+        let free = |x: i32, y: i32| window_free(m, at, x, y);
+        let mut best: Option<(i32, u32)> = None;
+        for y in 0..w {
+            for x in 0..w {
+                let d = dist[y as usize * WIN + x as usize];
+                if d == u32::MAX {
+                    continue;
+                }
+                let c = (0..=clear)
+                    .take_while(|&c| (-c..=c).all(|a| (-c..=c).all(|b| free(x + a, y + b))))
+                    .last();
+                if let Some(c) = c {
+                    if best.is_none_or(|(bc, bd)| c > bc || (c == bc && d < bd)) {
+                        best = Some((c, d));
+                    }
                 }
             }
         }
@@ -664,12 +673,15 @@ mod tests {
             let at = [at.0, at.1];
             prop_assume!(!m.marked(at[0], at[1]));
             let p = plan_on(&m, &ask(at, [toward.0, toward.1], clear, true)).unwrap();
-            let (best, d) = oracle(&m, at, clear).unwrap();
+            let dist = bfs(&m, at);
+            let (best, d) = oracle(&m, at, &dist, clear).unwrap();
             prop_assert_eq!(p.clear_px, best);
             prop_assert_eq!(p.crossed, 0);
             let t = [p.target_px[0] - at[0] + HALF, p.target_px[1] - at[1] + HALF];
-            let o = oracle_dist(&m, at, t);
-            prop_assert_eq!(o, Some(d), "target {:?} not among the nearest", p.target_px);
+            let inside = (0..WIN as i32).contains(&t[0]) && (0..WIN as i32).contains(&t[1]);
+            prop_assert!(inside, "target {:?} outside the window", p.target_px);
+            let o = dist[t[1] as usize * WIN + t[0] as usize];
+            prop_assert_eq!(o, d, "target {:?} not among the nearest", p.target_px);
             for a in -best..=best {
                 for b in -best..=best {
                     prop_assert!(!m.marked(p.target_px[0] + a, p.target_px[1] + b));
@@ -682,32 +694,5 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// Steps from the window's centre to window pixel `t` through free pixels.
-    fn oracle_dist(m: &TestMap, at: [i32; 2], t: [i32; 2]) -> Option<u32> {
-        let w = WIN as i32;
-        let free = |x: i32, y: i32| {
-            (0..w).contains(&x)
-                && (0..w).contains(&y)
-                && !m.marked(at[0] - HALF + x, at[1] - HALF + y)
-        };
-        let mut dist = vec![u32::MAX; WIN * WIN];
-        let mut q = std::collections::VecDeque::new();
-        dist[HALF as usize * WIN + HALF as usize] = 0;
-        q.push_back((HALF, HALF));
-        while let Some((x, y)) = q.pop_front() {
-            let d = dist[y as usize * WIN + x as usize];
-            if [x, y] == t {
-                return Some(d);
-            }
-            for (nx, ny) in [(x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)] {
-                if free(nx, ny) && dist[ny as usize * WIN + nx as usize] == u32::MAX {
-                    dist[ny as usize * WIN + nx as usize] = d + 1;
-                    q.push_back((nx, ny));
-                }
-            }
-        }
-        None
     }
 }
