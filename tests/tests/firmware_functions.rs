@@ -2,7 +2,7 @@
 
 use sim_host::emu::EmuBoard;
 use sim_host::image::Image;
-use system_tests::images_dir;
+use system_tests::{images_dir, put_word, ram_word};
 use vme_map::{ArrayBus, BoardId, GlobalBus, GLOBAL_RAM_SIZE};
 
 fn board_of(id: BoardId) -> (EmuBoard, Image, Vec<u8>) {
@@ -282,7 +282,7 @@ fn the_square_root_table_interpolates_to_within_one_of_the_floor() {
         .symbol("__fx_sqrt_table")
         .expect("__fx_sqrt_table in the image");
     let t: Vec<u64> = (0..=768u32)
-        .map(|k| ram_word(&b, table + 4 * k) as u64)
+        .map(|k| ram_word(&b.ram, table + 4 * k) as u64)
         .collect();
     for (k, &v) in t.iter().enumerate() {
         let n = (256 + k as u128) << 38;
@@ -451,7 +451,10 @@ fn the_arrest_log_look_up_matches_the_host() {
                 let (_, cycles) = b
                     .call(&mut g, f, &[BUF, now, age, fb, out], 100_000)
                     .expect("the routine returns");
-                let got = [ram_word(&b, out) as i32, ram_word(&b, out + 4) as i32];
+                let got = [
+                    ram_word(&b.ram, out) as i32,
+                    ram_word(&b.ram, out + 4) as i32,
+                ];
                 assert_eq!(
                     got,
                     log.at_age(now, age, [11, -12]),
@@ -504,17 +507,6 @@ fn run_probe(b: &mut EmuBoard, g: &mut [u8], f: u32, inputs: &[u32], n: u32) -> 
         .expect("the probe returns");
     assert_eq!(ret, 0);
     out
-}
-
-/// The big-endian word at `addr` of the board's RAM.
-fn ram_word(b: &EmuBoard, addr: u32) -> u32 {
-    let a = addr as usize;
-    u32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-}
-
-/// Writes `w` big-endian at `addr` of a board's RAM.
-fn put_word(ram: &mut [u8], addr: u32, w: u32) {
-    ram[addr as usize..addr as usize + 4].copy_from_slice(&w.to_be_bytes());
 }
 
 /// Private I/O registers as plain halfwords, as the servo image's board probe keeps them.
@@ -595,7 +587,7 @@ fn the_servo_board_image_passes_like_the_host() {
             hb,
         ]);
         let got: Vec<u32> = (0..15)
-            .map(|k| ram_word(&b, out + 4 * (15 * i + k) as u32))
+            .map(|k| ram_word(&b.ram, out + 4 * (15 * i + k) as u32))
             .collect();
         assert_eq!(got, want, "pass {i}");
         driving += (want[11] != 0 && want[12] != 0) as u32;
@@ -651,7 +643,7 @@ fn the_servo_image_steps_like_the_host() {
             }),
         });
         let got: Vec<i32> = (0..WORDS)
-            .map(|k| ram_word(&b, out + 4 * (WORDS * i + k) as u32) as i32)
+            .map(|k| ram_word(&b.ram, out + 4 * (WORDS * i + k) as u32) as i32)
             .collect();
         let want = o.probe_words().to_vec();
         assert_eq!(got, want, "pass {i}");

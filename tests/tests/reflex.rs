@@ -7,7 +7,7 @@ use reflex::Reflex;
 use sim_host::emu::EmuBoard;
 use sim_host::image::Image;
 use sim_host::sim::Rng;
-use system_tests::images_dir;
+use system_tests::{images_dir, put_word, ram_word};
 use vme_map::{ArrayBus, BoardId, GLOBAL_RAM_SIZE};
 
 /// Scratch RAM for the probe's script: above the image's code, below its data and bss at
@@ -28,20 +28,16 @@ fn probe_board(img: &Image, global: &mut [u8], name: &str, words: &[u32]) -> (Em
     let f = img
         .symbol(name)
         .unwrap_or_else(|| panic!("{name} in the image"));
-    for (k, w) in words.iter().enumerate() {
-        let a = (BUF + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    for (k, &w) in words.iter().enumerate() {
+        put_word(&mut b.ram, BUF + 4 * k as u32, w);
     }
     (b, f)
 }
 
 /// `n` words of the board's RAM from `addr`.
 fn ram_words(b: &EmuBoard, addr: u32, n: usize) -> Vec<i32> {
-    (0..n)
-        .map(|k| {
-            let a = addr as usize + 4 * k;
-            i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-        })
+    (0..n as u32)
+        .map(|k| ram_word(&b.ram, addr + 4 * k) as i32)
         .collect()
 }
 

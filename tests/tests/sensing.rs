@@ -9,7 +9,7 @@ use sim_host::optics::{BeaconWindow, Camera, OpticsConfig};
 use sim_host::sensing_bench::{self, place, system};
 use sim_host::sensing_cal::{self, ScanPlan};
 use sim_host::sim::{Calibration, Rng};
-use system_tests::images_dir;
+use system_tests::{images_dir, put_word, ram_word};
 use vme_map::records::beacon_flags as bf;
 use vme_map::{BoardId, BoardState, FaultCode, GLOBAL_RAM_SIZE};
 
@@ -158,9 +158,8 @@ fn image_against_host(table: &[u32]) -> [usize; 7] {
     let n = 5000u32;
     let inputs = script(n as usize);
     let (inp, out) = (BUF, BUF + 4 * inputs.len() as u32);
-    for (k, w) in inputs.iter().enumerate() {
-        let a = (inp + 4 * k as u32) as usize;
-        b.ram[a..a + 4].copy_from_slice(&w.to_be_bytes());
+    for (k, &w) in inputs.iter().enumerate() {
+        put_word(&mut b.ram, inp + 4 * k as u32, w);
     }
     let (ret, _) = b
         .call(&mut global, f, &[inp, n, out], 2_000_000_000)
@@ -179,10 +178,7 @@ fn image_against_host(table: &[u32]) -> [usize; 7] {
     let mut seen = [0usize; 7];
     for i in 0..n as usize {
         let got: Vec<i32> = (0..W)
-            .map(|k| {
-                let a = (out + 4 * (W * i + k) as u32) as usize;
-                i32::from_be_bytes([b.ram[a], b.ram[a + 1], b.ram[a + 2], b.ram[a + 3]])
-            })
+            .map(|k| ram_word(&b.ram, out + 4 * (W * i + k) as u32) as i32)
             .collect();
         assert_eq!(got, host[W * i..W * i + W], "slot {i}");
         let flags = host[W * i + 6] as u32;
