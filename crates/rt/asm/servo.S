@@ -591,15 +591,25 @@ servo_control_body:
     neg.l   %d0
     move.l  %d0, %d4
     bra     8f
-7:  move.l  %d4, %d0            /* dir = clamp(mul_shr(u, 10, 16), -1, 1) */
-    MULSHR  %d0, #(10 * ONE_Q16), 16, %d1, %d7, %d7
-    CLAMP   %d0, #ONE_Q16, %d1
+7:  /* dir = clamp(mul_shr(u, 10, 16), -1, 1): 10 u exactly (|u| <= umax, which
+     * servo::params asserts below 2^31 / 10); at +-1 the friction itself (5, 6) */
+    move.l  %d4, %d0
+    move.l  %d4, %d1
+    lsl.l   #3, %d0
+    add.l   %d1, %d1
+    add.l   %d1, %d0            /* 10 u */
+    cmpi.l  #ONE_Q16, %d0
+    bge     5f
+    cmpi.l  #-ONE_Q16, %d0
+    ble     6f
     bra     9f
-5:  move.l  #ONE_Q16, %d0
-    bra     9f
-6:  move.l  #-ONE_Q16, %d0
+5:  move.l  K_FRIC(%a2), %d0    /* dir = 1: mul_shr(friction, 1.0, 16) is friction */
+    bra     20f
+6:  move.l  K_FRIC(%a2), %d0    /* dir = -1: -friction (>= 0, so no overflow) */
+    neg.l   %d0
+    bra     20f
 9:  MULSHR  %d0, K_FRIC(%a2), 16, %d1, %d7, %d7
-    add.l   %d4, %d0            /* clamp(sat(u + friction), -umax, umax) */
+20: add.l   %d4, %d0            /* clamp(sat(u + friction), -umax, umax) */
     SATV    %d0
     CLAMP   %d0, K_UMAX(%a2), %d1
     move.l  %d0, %d4
@@ -763,6 +773,9 @@ servo_control_body:
     /* servo::params::TIMER_TICK_Q40, servo's STALE_Q32, OBSERVER_SETTLE_Q32,
      * ANGLE_LIMIT_URAD and urad_to_q16's multiplier (servo::layout asserts them) */
     .equ TIMER_TICK_Q40, 549756
+    .if (TIMER_TICK_Q40 & 255) - 124
+    .error "__servo_pass's period takes TIMER_TICK_Q40 as 2147 * 256 + 124"
+    .endif
     .equ STALE_Q32, 85899346
     .equ SETTLE_Q32, 128849019
     .equ ANGLE_LIMIT_URAD, 25000000
@@ -797,7 +810,17 @@ servo_pass_body:
     move.w  4(%a0), %d3
     sub.w   SV_LAST_TIMER(%a6), %d3
     move.l  %d3, %d5            /* the ticks, written once the pass is the common one */
-    MULSHR  %d3, #TIMER_TICK_Q40, 8, %d1, %d7, %d7
+    /* TIMER_TICK_Q40 = 2147 * 256 + 124, so mul_shr(ticks, it, 8) for ticks < 2^16 is
+     * ticks * 2147 + (ticks * 124 + 128) >> 8, exactly and far from overflow: one MULU.W
+     * and shifts for the MULS.L, its rounding and its range check */
+    move.l  %d3, %d1
+    mulu.w  #(TIMER_TICK_Q40 >> 8), %d3
+    lsl.l   #5, %d1             /* ticks * 124 = (ticks * 31) << 2 */
+    sub.l   %d5, %d1
+    lsl.l   #2, %d1
+    add.l   #128, %d1
+    lsr.l   #8, %d1
+    add.l   %d1, %d3
     /* the subgoal's verdict d6 (a Hold, or HOLD_NONE), nothing changed yet: out of range
      * when a goal is beyond the angle limit */
     moveq   #-1, %d6            /* HOLD_NONE's byte */

@@ -297,6 +297,9 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
     let c_per_two_a_q32 = fit(round(Q32 * b / (4.0 * kp)));
     let yl_per_two_a_q32 = fit(round(Q32 * (b / (2.0 * kp)) * (b / (2.0 * kp))));
     let two_a_q16 = fit(round(Q16 * 2.0 * p.uhat_nm / (prior * l.inertia_kgm2)));
+    // The image's near-goal corrections (crates/rt/asm/servo.S) take mul_shr(u, 10, 16) as
+    // 10 u, exact for |u| <= umax only below this, and +-friction as never overflowing.
+    assert!(Q16 * p.umax_nm < (i32::MAX / 10) as f64 && p.friction_comp_nm >= 0.0);
     LinkConst {
         rad_per_count_q32: fit(round(
             Q32 * core::f64::consts::TAU / l.counts_per_rev as f64,
@@ -362,9 +365,10 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
 }
 
 /// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its
-/// common pass takes 5,997 cycles at rest, 6,739 on the braking curve (a square root a
-/// link) and 5,955 holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host
-/// profile servo`, `--servo-goal-urad`; docs/servo.md). 3 kHz leaves 5,566.
+/// common pass takes 5,961 cycles at rest, 6,552 on the braking curve (a square root a
+/// link) and 5,917 holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host
+/// profile servo`, `--servo-goal-urad`), and 6,095 on average in fig. VI.5's image run
+/// (docs/servo.md). 3 kHz leaves 5,566.
 pub const IMAGE_HZ: f64 = 2400.0;
 
 /// Near-goal frequencies of the tuned law at [`IMAGE_HZ`], Hz (critically damped): the
