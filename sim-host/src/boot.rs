@@ -237,7 +237,7 @@ pub struct Profile {
     pub addresses: Vec<(u32, u64, u64, String)>,
     /// The sensing board's (busy cycles, strobe slots) in the profiled time
     /// (`sensing_bench::SlotMeter`), or the servo's (busy cycles, passes)
-    /// (`servo_bench::PassMeter`): their work without the wait for the timer.
+    /// (`servo_bench::PassClock`): their work without the wait for the timer.
     pub busy: Option<(u64, u64)>,
 }
 
@@ -292,13 +292,9 @@ pub fn profile(
     }
     if board == BoardId::Servo {
         // The servo's busy cycles a pass, beside its paced loop rate.
-        let io = std::mem::replace(
-            &mut sys.boards[0].io,
-            Box::new(crate::devices::IdOnly::new(board)),
-        );
-        let m = crate::servo_bench::PassMeter::new(io);
-        meter = Some(m.stats.clone());
-        sys.boards[0].io = Box::new(m);
+        let io = crate::devices::ServoIo::new([0.0; 2]);
+        meter = Some(io.passes.stats.clone());
+        sys.boards[0].io = Box::new(io);
     }
     // What the host publishes every 0.25 ms for the board to find fresh. The reflex: a
     // servo, positions and a map (the free-space case at rest of `sim-host bench reflex`).

@@ -100,6 +100,8 @@ pub struct ServoIo {
     amp: AmpCtrl,
     /// Cycle of the last AMP_CTRL write (the watchdog's retrigger).
     fed_at: Option<u64>,
+    /// The image's busy cycles a control pass, metered from the accesses it makes here.
+    pub passes: crate::servo_bench::PassClock,
 }
 
 impl ServoIo {
@@ -115,6 +117,7 @@ impl ServoIo {
             dac: [0; 2],
             amp: AmpCtrl::empty(),
             fed_at: None,
+            passes: Default::default(),
         };
         for i in 0..2 {
             io.offset_counts[i] = (zero_rad[i] / rpc[i]).floor() as i64;
@@ -173,6 +176,7 @@ impl Device for ServoIo {
         if !decodes(&REGISTERS, off, false) {
             return None;
         }
+        self.passes.read(off, now);
         Some(match off {
             regs::BOARD_ID => 0,
             ENC0 => self.latched[0],
@@ -194,6 +198,7 @@ impl Device for ServoIo {
         if !decodes(&REGISTERS, off, true) {
             return false;
         }
+        self.passes.write(off);
         match off {
             ENC_CTRL => {
                 let c = EncCtrl::from_bits_truncate(val);

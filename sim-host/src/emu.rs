@@ -46,7 +46,7 @@ impl<T: Device + ?Sized> Device for Box<T> {
 }
 
 /// What a meter of an image's busy time counted (`sensing_bench::SlotMeter` a strobe slot a
-/// pass, `servo_bench::PassMeter` a control pass): shared between the meter, which the
+/// pass, `servo_bench::PassClock` a control pass): shared between the meter, which the
 /// board's I/O owns, and the caller.
 #[derive(Debug, Default)]
 pub struct BusyStats {
@@ -54,6 +54,8 @@ pub struct BusyStats {
     pub busy_cycles: std::sync::atomic::AtomicU64,
     /// Passes counted.
     pub passes: std::sync::atomic::AtomicU64,
+    /// The longest pass counted, cycles.
+    pub max_cycles: std::sync::atomic::AtomicU64,
 }
 
 impl BusyStats {
@@ -62,6 +64,12 @@ impl BusyStats {
         use std::sync::atomic::Ordering::Relaxed;
         self.busy_cycles.fetch_add(cycles, Relaxed);
         self.passes.fetch_add(1, Relaxed);
+        self.max_cycles.fetch_max(cycles, Relaxed);
+    }
+
+    /// The longest pass counted so far, cycles.
+    pub fn max(&self) -> u64 {
+        self.max_cycles.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// (busy cycles, passes) so far.

@@ -875,6 +875,12 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
                         b.state
                     );
                 }
+                if let Some(p) = &s.servo_busy {
+                    println!(
+                        "servo passes: {} metered, busy {:.0} cycles mean, {} max; {} over 5,566 (3 kHz)",
+                        p.passes, p.mean_cycles, p.max_cycles, p.over_3khz
+                    );
+                }
             }
             println!(
                 "wrote trace.csv, summary.json, joints.png, task.png, cspace.png and report.html to {}",

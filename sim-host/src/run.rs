@@ -68,6 +68,21 @@ impl Default for RunOptions {
     }
 }
 
+/// Image mode: the servo image's control passes, metered at its registers
+/// (`servo_bench::PassClock`: from the timer read that ends the wait for the period to the
+/// next wait's first), in cycles of the 16.7 MHz 68020.
+#[derive(Serialize, Clone, Debug, PartialEq)]
+pub struct ServoBusy {
+    /// Passes metered.
+    pub passes: u64,
+    /// Mean busy cycles a pass.
+    pub mean_cycles: f64,
+    /// The longest pass.
+    pub max_cycles: u64,
+    /// Passes longer than 5,566 cycles (3 kHz).
+    pub over_3khz: u64,
+}
+
 /// One board's figures in the summary.
 #[derive(Serialize, Clone, Debug, PartialEq)]
 pub struct BoardSummary {
@@ -132,6 +147,8 @@ pub struct Summary {
     pub goal_reached: Option<bool>,
     /// Per-board loop figures.
     pub boards: Vec<BoardSummary>,
+    /// Image mode with the servo as an image: its passes' busy cycles; null otherwise.
+    pub servo_busy: Option<ServoBusy>,
 }
 
 /// The trace's header line.
@@ -458,6 +475,16 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
             }
         })
         .collect();
+    let servo_busy = sim.emu_board(BoardId::Servo).is_some().then(|| {
+        let p = &sim.servo_io.passes;
+        let (busy, passes) = p.stats.get();
+        ServoBusy {
+            passes,
+            mean_cycles: busy as f64 / passes.max(1) as f64,
+            max_cycles: p.stats.max(),
+            over_3khz: p.over_budget,
+        }
+    });
     let c = sim.collisions;
     Summary {
         scenario: scenario.name.clone(),
@@ -474,6 +501,7 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
         final_goal_error_m: goal_err,
         goal_reached: goal_err.map(|e| e <= 0.01),
         boards,
+        servo_busy,
     }
 }
 
