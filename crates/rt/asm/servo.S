@@ -65,6 +65,8 @@
     .equ LINK_STATE_BYTES, 52
     /* servo::MAX_DT_Q32 (10 ms), regs::servo::DAC_MAX / DAC_MIN */
     .equ MAX_DT_Q32, 42949673
+    /* servo::MAX_INNOVATION_Q16 (servo::layout asserts it) */
+    .equ MAX_INNOVATION_Q16, 655
     .equ DAC_MAX, 2047
     .equ DAC_MIN, -2048
     .equ ONE_Q16, 65536
@@ -415,16 +417,26 @@ servo_observe_body:
     SATASL8 %d4, %d7
     sub.l   O_THETA(%a1), %d4
     SATV    %d4
-    /* implausible when |e| > sat(sat(mul_shr(omega_limit, dt, 32) + 0.01 rad) * 256) */
-    move.l  K_OMLIM(%a0), %d0
+    /* implausible when |e| > sat(sat(mul_shr(omega_limit, dt, 32) + 0.01 rad) * 256);
+     * never when |e| <= 0.01 rad (Q24) with dt >= 0, the bound's least then (omega_limit
+     * >= 0: servo::params asserts it), which is every pass of a locked observer: the
+     * bound's product only beyond */
+    move.l  %d4, %d1
+    SATABS  %d1
+    tst.l   %d3
+    bmi.s   5f
+    cmpi.l  #(MAX_INNOVATION_Q16 * 256), %d1
+    ble.s   6f
+5:  move.l  K_OMLIM(%a0), %d0
     MULSHR  %d0, %d3, 32, %d1, %d7, %d7
-    addi.l  #655, %d0
+    addi.l  #MAX_INNOVATION_Q16, %d0
     SATV    %d0
     SATASL8 %d0, %d7
     move.l  %d4, %d1
     SATABS  %d1
     cmp.l   %d0, %d1
     bgt     9f
+6:
     /* friction the law compensates: f the way the link turns; at rest clamp(u, -f, f) */
     move.l  O_OMEGA(%a1), %d5   /* omega */
     move.l  S_TORQUE(%a2), %d6  /* u: the torque that acted */

@@ -612,6 +612,7 @@ pub mod layout {
     const _: () = assert!(super::STALE_Q32 == 85_899_346);
     const _: () = assert!(super::OBSERVER_SETTLE_Q32 == 128_849_019);
     const _: () = assert!(super::MAX_DT_Q32 == 42_949_673);
+    const _: () = assert!(super::MAX_INNOVATION_Q16 == 655);
     const _: () = assert!(super::ANGLE_LIMIT_URAD == 25_000_000);
     const _: () = assert!(super::URAD_TO_Q16_Q32 == 281_474_977);
     // `Servo` and its arrest log as the image lays them out (an `i32` aligns to 2 on the

@@ -299,7 +299,10 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
     let two_a_q16 = fit(round(Q16 * 2.0 * p.uhat_nm / (prior * l.inertia_kgm2)));
     // The image's near-goal corrections (crates/rt/asm/servo.S) take mul_shr(u, 10, 16) as
     // 10 u, exact for |u| <= umax only below this, and +-friction as never overflowing.
+    // Its observer takes an innovation within MAX_INNOVATION_Q16 as plausible without the
+    // bound's product, true for a speed limit >= 0.
     assert!(Q16 * p.umax_nm < (i32::MAX / 10) as f64 && p.friction_comp_nm >= 0.0);
+    assert!(l.max_speed_rad_s >= 0.0);
     LinkConst {
         rad_per_count_q32: fit(round(
             Q32 * core::f64::consts::TAU / l.counts_per_rev as f64,
