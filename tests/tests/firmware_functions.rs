@@ -201,7 +201,7 @@ fn the_fixed_point_multiply_matches_the_host_bit_for_bit() {
         let want = servo::fx::host_mul_shr(a, bb, sh);
         assert_eq!(f(&[a, bb, sh as i32]), want, "mul_shr({a}, {bb}, {sh})");
     }
-    for sh in [8u32, 16, 17, 24, 28, 32] {
+    for sh in [8u32, 16, 17, 24, 32] {
         let mut f = any_routine(&format!("__fx_mul_shr{sh}"));
         // The cases, and values just inside and outside the range that fits.
         let mut pairs: Vec<(i32, i32)> = cases.iter().map(|&(a, b, _)| (a, b)).collect();

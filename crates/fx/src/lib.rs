@@ -25,7 +25,6 @@ pub fn mul_shr(a: i32, b: i32, sh: u32) -> i32 {
             fn __fx_mul_shr16(a: i32, b: i32) -> i32;
             fn __fx_mul_shr17(a: i32, b: i32) -> i32;
             fn __fx_mul_shr24(a: i32, b: i32) -> i32;
-            fn __fx_mul_shr28(a: i32, b: i32) -> i32;
             fn __fx_mul_shr32(a: i32, b: i32) -> i32;
         }
         // SAFETY: pure functions in the runtime's assembly, linked into every image. The
@@ -37,7 +36,6 @@ pub fn mul_shr(a: i32, b: i32, sh: u32) -> i32 {
                 16 => __fx_mul_shr16(a, b),
                 17 => __fx_mul_shr17(a, b),
                 24 => __fx_mul_shr24(a, b),
-                28 => __fx_mul_shr28(a, b),
                 32 => __fx_mul_shr32(a, b),
                 _ => __fx_mul_shr(a, b, sh),
             }

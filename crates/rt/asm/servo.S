@@ -32,7 +32,6 @@
     .equ K_FRIC, 60
     .equ K_DEADBAND, 64
     .equ K_MOVING, 68
-    .equ K_DAC_PER_NM, 72
     .equ K_NM_PER_DAC, 76
     .equ K_K1, 80
     .equ K_K2, 84
@@ -42,6 +41,7 @@
     .equ K_SLOPE, 104
     .equ K_CPER, 108
     .equ K_YLPER, 112
+    .equ K_DAC_Q5, 128
     /* Observer */
     .equ O_THETA, 0
     .equ O_OMEGA, 4
@@ -60,7 +60,7 @@
     .equ N_Y2, 44
     .equ S_TORQUE, 48
     /* sizes of LinkConst, Observer, LinkState */
-    .equ LINK_CONST_BYTES, 132
+    .equ LINK_CONST_BYTES, 136
     .equ OBSERVER_BYTES, 8
     .equ LINK_STATE_BYTES, 52
     /* servo::MAX_DT_Q32 (10 ms), regs::servo::DAC_MAX / DAC_MIN */
@@ -107,15 +107,16 @@
 .endm
 
 /* MULSHR a, b, sh, h, t: a = round(a * b / 2^sh) saturated to i32, fx::mul_shr with a
- * fixed shift (8, 16, 17, 24, 28 or 32); b any data addressing mode, h a scratch data
+ * fixed shift (8, 16, 17, 24 or 32); b any data addressing mode, h a scratch data
  * register, t a scratch data or address register, z (optional) a scratch data register
  * for the rounding carry (MOVEQ and ADDX: faster than the branch without it). The 64-bit
  * product of MULS.L plus 2^(sh-1), its high word h, fits in 32 bits after the shift when h
  * lies in [-2^(sh-1), 2^(sh-1)) (sh < 32); otherwise the sign of h says which way it
  * saturates (that branch is out of line). The check per shift, the cheapest found on the
- * 68020: 16, h equal to its low word sign-extended (MOVE.W, EXT.L or MOVEA.W, CMP); 24 and
- * 28, the V flag of ASL.L shifting h into place (set when a bit unlike the sign leaves it;
- * t keeps h for the sign); 8 and 17, h + 2^(sh-1) below 2^sh unsigned. */
+ * 68020: 16, h equal to its low word sign-extended (MOVE.W, EXT.L or MOVEA.W, CMP); 24,
+ * the V flag of ASL.L shifting h into place (set when a bit unlike the sign leaves it; t
+ * keeps h for the sign); 8 and 17, h + 2^(sh-1) below 2^sh unsigned. (28 was the notch's,
+ * in Q28 until 2026-11-26: the notch is 16-bit now.) */
 .macro MULSHR a, b, sh, h, t, z
     muls.l  \b, \h:\a
 .if \sh == 32
@@ -146,12 +147,6 @@
     rol.l   #8, \a
     move.b  \a, \h
     move.l  \h, \a
-  .elseif \sh == 28
-    move.l  \h, \t
-    asl.l   #4, \h
-    bvs     .Lms\@
-    bfextu  \a{#0:#4}, \a
-    or.l    \h, \a
   .else
     move.l  \h, \t
     add.l   #(1 << (\sh - 1)), \t
@@ -178,7 +173,7 @@
     .subsection 1
 .Lms\@:
     move.l  #0x7fffffff, \a
-  .if \sh >= 24
+  .if \sh == 24
     tst.l   \t                  /* h before the shift */
   .else
     tst.l   \h
@@ -217,7 +212,6 @@ __fx_mul_shr\sh:
     MULSHR_FN 16
     MULSHR_FN 17
     MULSHR_FN 24
-    MULSHR_FN 28
     MULSHR_FN 32
 
 /* i32 __fx_mul_floor_shr24(i32 a, i32 b): floor(a * b / 2^24), the low 32 bits
@@ -625,29 +619,42 @@ servo_control_body:
     SATV    %d0
     CLAMP   %d0, K_UMAX(%a2), %d1
     move.l  %d0, %d4
-8:  /* the notch: y = b0 (x + x2) + a1 (x1 - y1) - a2 y2 */
+8:  /* the torque in Q11: x = (u + 16) >> 5 (|u| <= umax < 16 N m: an i16) */
+    moveq   #16, %d0
+    add.l   %d0, %d4
+    asr.l   #5, %d4
+    /* the notch: y = clamp((b0 (x + x2) + a1 (x1 - y1) - a2 y2 + 2^12) >> 13, +-32767),
+     * coefficients Q13 and data Q11 within i16 (params asserts the sum below 2^31): the
+     * sums of two by 32-bit MULS.L, y2 by MULS.W, no range checks */
     move.l  K_B0(%a2), %d0
-    tst.l   %d0
+    tst.l   %d0                 /* (MOVE sets Z too; the image check wants the test) */
     beq     10f
     move.l  %d4, %d6
     add.l   N_X2(%a3), %d6
-    MULSHR  %d0, %d6, 28, %d1, %d7, %d7
-    move.l  %d0, %d6
+    muls.l  %d0, %d6            /* b0 (x + x2) */
     move.l  N_X1(%a3), %d0
     sub.l   N_Y1(%a3), %d0
-    MULSHR  %d0, K_A1(%a2), 28, %d1, %d7, %d7
+    muls.l  K_A1(%a2), %d0      /* a1 (x1 - y1) */
     add.l   %d0, %d6
-    move.l  N_Y2(%a3), %d0
-    MULSHR  %d0, K_A2(%a2), 28, %d1, %d7, %d7
+    move.w  N_Y2+2(%a3), %d0
+    muls.w  K_A2+2(%a2), %d0    /* a2 y2 */
     sub.l   %d0, %d6
+    addi.l  #4096, %d6
+    moveq   #13, %d0
+    asr.l   %d0, %d6
+    CLAMP   %d6, #32767, %d1
     move.l  N_X1(%a3), N_X2(%a3)
     move.l  %d4, N_X1(%a3)
     move.l  N_Y1(%a3), N_Y2(%a3)
     move.l  %d6, N_Y1(%a3)
     move.l  %d6, %d4
-10: /* the DAC code: clamp(mul_shr(u, dac_per_nm, 32), DAC_MIN, DAC_MAX) */
-    move.l  %d4, %d0
-    MULSHR  %d0, K_DAC_PER_NM(%a2), 32, %d1, %d7, %d7
+10: /* the DAC code: clamp((y dac_per_nm_q5 + 2^15) >> 16, DAC_MIN, DAC_MAX), y and the
+     * constant within i16 */
+    move.w  %d4, %d0
+    muls.w  K_DAC_Q5+2(%a2), %d0
+    addi.l  #32768, %d0
+    swap    %d0
+    ext.l   %d0
     cmpi.l  #DAC_MAX, %d0
     ble     11f
     move.l  #DAC_MAX, %d0
@@ -761,7 +768,7 @@ servo_control_body:
     .equ SV_MEMO_Q16, 172
     .equ SV_LOG, 180
     /* LinkConst::proximate */
-    .equ K_PROXIMATE, 128
+    .equ K_PROXIMATE, 132
     /* ArrestLog */
     .equ LOG_N, 0
     .equ LOG_KEPT, 4

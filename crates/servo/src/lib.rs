@@ -224,7 +224,9 @@ pub fn near_goal(k: &LinkConst, u_q16: i32, err_q16: i32, omega_q16: i32) -> i32
         .clamp(-k.umax_q16, k.umax_q16)
 }
 
-/// The notch at a link's first resonance, on the commanded torque (beyond the thesis).
+/// The notch at a link's first resonance, on the commanded torque (beyond the thesis), in
+/// Q11 N m: its data are i16 and its coefficients Q13 i16 ([`params::LinkConst::notch_q13`]),
+/// so that the 68020 filters with 16-bit and 32-bit products and no range checks.
 /// `repr(C)`: `__servo_control2` keeps it ([`layout`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
@@ -236,20 +238,21 @@ pub struct Notch {
 }
 
 impl Notch {
-    /// Filters one torque sample (Q16 N m); identity when the link has no notch.
+    /// Filters one torque sample, Q16 N m within +-umax, into Q11 N m (the input rounded to
+    /// Q11 when the link has no notch). The sum cannot overflow: the input is within +-umax
+    /// (below 16 N m, 2^15 in Q11), the output is clamped to an i16, and the coefficients'
+    /// magnitudes sum below 2^15 (both asserted in [`params`]).
     #[inline(never)]
     pub fn filter(&mut self, k: &LinkConst, x_q16: i32) -> i32 {
-        let [b0, a1, a2] = k.notch_q28;
+        let [b0, a1, a2] = k.notch_q13;
+        let x = (x_q16 + 16) >> 5;
         if b0 == 0 {
-            return x_q16;
+            return x;
         }
-        // Plain adds: the input is a torque within +-umax (2^20 in Q16) and the notch's
-        // gain is at most a few, so no sum comes near 2^31. (Saturating adds here compiled
-        // to a condition-code clobber on the 68k; docs/toolchain.md.)
-        let y = mul_shr(b0, x_q16 + self.x2, 28) + mul_shr(a1, self.x1 - self.y1, 28)
-            - mul_shr(a2, self.y2, 28);
+        let y = ((b0 * (x + self.x2) + a1 * (self.x1 - self.y1) - a2 * self.y2 + (1 << 12)) >> 13)
+            .clamp(-32767, 32767);
         self.x2 = self.x1;
-        self.x1 = x_q16;
+        self.x1 = x;
         self.y2 = self.y1;
         self.y1 = y;
         y
@@ -351,11 +354,20 @@ fn pushes_at_full_torque(code: i16, omega_q16: i32) -> bool {
 }
 
 /// The DAC code for a torque (Q16 N m) on a link: never beyond the 12-bit range, and the
-/// range itself is umax.
+/// range itself is umax. (The law's own is [`dac_code_q11`]; the bench's baseline
+/// controllers use this one.)
 #[inline(never)]
 pub fn dac_code(k: &LinkConst, torque_q16: i32) -> i16 {
     mul_shr(torque_q16, k.dac_per_nm_q16, 32).clamp(params::DAC_MIN as i32, params::DAC_MAX as i32)
         as i16
+}
+
+/// The law's DAC code for its torque in Q11 N m (within i16, as [`Notch::filter`] gives
+/// it): round(torque x codes per N m), within the 12-bit range; one `MULS.W` on the 68020.
+#[inline(never)]
+pub fn dac_code_q11(k: &LinkConst, torque_q11: i32) -> i16 {
+    ((torque_q11 * k.dac_per_nm_q5 + (1 << 15)) >> 16)
+        .clamp(params::DAC_MIN as i32, params::DAC_MAX as i32) as i16
 }
 
 /// Largest plausible difference between measurement and estimate beyond the distance the
@@ -512,7 +524,7 @@ impl LinkState {
             law(k, self.est.brake_q32, err_q16, omega_q16)
         };
         let u = self.notch.filter(k, near_goal(k, u, err_q16, omega_q16));
-        let code = dac_code(k, u);
+        let code = dac_code_q11(k, u);
         // The torque the amplifier will actually produce, for the observer's next update.
         let applied = code as i32 * k.nm_per_dac_q16;
         // Full torque the way the link turns (the code at the DAC's end of range).
@@ -537,7 +549,7 @@ pub mod layout {
     const _: () = assert!(offset_of!(LinkConst, inertia_lo_q32) == 36);
     const _: () = assert!(offset_of!(LinkConst, inertia_hi_q32) == 40);
     const _: () = assert!(offset_of!(LinkConst, adapt_min_dw_q16) == 44);
-    const _: () = assert!(offset_of!(LinkConst, notch_q28) == 48);
+    const _: () = assert!(offset_of!(LinkConst, notch_q13) == 48);
     const _: () = assert!(offset_of!(LinkConst, friction_comp_q16) == 60);
     const _: () = assert!(offset_of!(LinkConst, deadband_q16) == 64);
     const _: () = assert!(offset_of!(LinkConst, moving_q16) == 68);
@@ -551,10 +563,11 @@ pub mod layout {
     const _: () = assert!(offset_of!(LinkConst, slope_q16) == 104);
     const _: () = assert!(offset_of!(LinkConst, c_per_two_a_q32) == 108);
     const _: () = assert!(offset_of!(LinkConst, yl_per_two_a_q32) == 112);
-    const _: () = assert!(offset_of!(LinkConst, proximate) == 128);
+    const _: () = assert!(offset_of!(LinkConst, dac_per_nm_q5) == 128);
+    const _: () = assert!(offset_of!(LinkConst, proximate) == 132);
     /// Bytes of one link's constants (`repr(C, align(4))`: the same on the 68020, where an
     /// `i32` aligns to 2, as on the host).
-    pub const LINK_CONST_BYTES: usize = 132;
+    pub const LINK_CONST_BYTES: usize = 136;
     const _: () = assert!(size_of::<LinkConst>() == LINK_CONST_BYTES);
     const _: () = assert!(offset_of!(Observer, theta_q24) == 0);
     const _: () = assert!(offset_of!(Observer, omega_q16) == 4);
@@ -671,9 +684,9 @@ pub mod layout {
             k.inertia_lo_q32,
             k.inertia_hi_q32,
             k.adapt_min_dw_q16,
-            k.notch_q28[0],
-            k.notch_q28[1],
-            k.notch_q28[2],
+            k.notch_q13[0],
+            k.notch_q13[1],
+            k.notch_q13[2],
             k.friction_comp_q16,
             k.deadband_q16,
             k.moving_q16,
@@ -691,6 +704,7 @@ pub mod layout {
             k.two_a_q16,
             k.yl_q16,
             k.c_q16,
+            k.dac_per_nm_q5,
         ]);
         b[offset_of!(LinkConst, proximate)] = k.proximate as u8;
         b

@@ -213,9 +213,11 @@ pub struct LinkConst {
     /// Velocity gained under full torque before the inertia is estimated (15 ms of it), Q16
     /// rad/s; 0 = no estimation.
     pub adapt_min_dw_q16: i32,
-    /// Notch coefficients (b0, a1, a2), Q28: y = b0 (x + x2) + a1 (x1 - y1) - a2 y2
-    /// (b2 = b0, b1 = a1 for a notch); b0 = 0 = no notch (a notch's b0 is 1 / (1 + alpha)).
-    pub notch_q28: [i32; 3],
+    /// Notch coefficients (b0, a1, a2), Q13, each within i16: on torques in Q11 N m,
+    /// y = (b0 (x + x2) + a1 (x1 - y1) - a2 y2) >> 13 (b2 = b0, b1 = a1 for a notch; the
+    /// 68020 multiplies with `MULS.W` and 32-bit `MULS.L`); b0 = 0 = no notch (a notch's b0
+    /// is 1 / (1 + alpha)).
+    pub notch_q13: [i32; 3],
     /// Coulomb friction compensation, Q16 N m.
     pub friction_comp_q16: i32,
     /// The dead band of the goal ([`DEADBAND_COUNTS`]; 0 = none, the thesis's law), Q16 rad: at rest
@@ -254,6 +256,9 @@ pub struct LinkConst {
     pub yl_q16: i32,
     /// See `yl_q16`.
     pub c_q16: i32,
+    /// DAC codes per N m, Q5, within i16: the law's code from its torque in Q11
+    /// ([`crate::dac_code_q11`], one `MULS.W` on the 68020).
+    pub dac_per_nm_q5: i32,
     /// Run [`crate::proximate_law`] (else [`crate::law`]).
     pub proximate: bool,
 }
@@ -303,6 +308,8 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
     // bound's product, true for a speed limit >= 0.
     assert!(Q16 * p.umax_nm < (i32::MAX / 10) as f64 && p.friction_comp_nm >= 0.0);
     assert!(l.max_speed_rad_s >= 0.0);
+    // The notch and the DAC code work on torques within +-umax in Q11, an i16 (`MULS.W`).
+    assert!(2048.0 * p.umax_nm < 32767.0);
     LinkConst {
         rad_per_count_q32: fit(round(
             Q32 * core::f64::consts::TAU / l.counts_per_rev as f64,
@@ -322,7 +329,7 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         } else {
             0
         },
-        notch_q28: notch(l.resonance_hz, p.notch_q, period_s),
+        notch_q13: notch(l.resonance_hz, p.notch_q, period_s),
         friction_comp_q16: fit(round(Q16 * p.friction_comp_nm)),
         deadband_q16: if p.friction_comp_nm > 0.0 {
             fit(round(
@@ -346,12 +353,16 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         two_a_q16,
         yl_q16: fx::host_mul_shr(two_a_q16, yl_per_two_a_q32, 32),
         c_q16: fx::host_mul_shr(two_a_q16, c_per_two_a_q32, 32),
+        dac_per_nm_q5: fit_i16(round(32.0 / nm_per_code)),
         proximate: p.proximate,
     }
 }
 
 /// Notch biquad at `hz` with quality `q` for period `period_s` (bilinear design with
-/// pre-warping, RBJ cookbook): (b0, a1, a2) in Q28; all zero for `q` <= 0 (no notch).
+/// pre-warping, RBJ cookbook): (b0, a1, a2) in Q13, its gain at DC exactly 1; all zero for
+/// `q` <= 0 (no notch).
+/// Each fits an i16, and |b0| + |a1| + |a2| < 2^15 - 1, so that with x, x2 within +-umax and
+/// x1, y1, y2 within i16 (Q11) the filter's sum stays below 2^16 (2^15 - 1) < 2^31.
 const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
     if q <= 0.0 {
         return [0; 3];
@@ -359,12 +370,18 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
     let w0 = core::f64::consts::TAU * hz * period_s;
     let alpha = sin(w0) / (2.0 * q);
     let a0 = 1.0 + alpha;
-    let q28 = Q32 / 16.0;
-    [
-        fit(round(q28 / a0)),
-        fit(round(q28 * -2.0 * cos(w0) / a0)),
-        fit(round(q28 * (1.0 - alpha) / a0)),
-    ]
+    let q13 = 8192.0;
+    // b0 = 1 / a0 = (1 + a2) / 2 exactly: with a2 rounded to an even number and b0 taken
+    // from it, the notch passes a steady torque unchanged (2 b0 + a1 = 1 + a1 + a2; the
+    // filter's rounding then keeps y = x a fixed point).
+    let a2 = 2 * fit_i16(round(q13 * (1.0 - alpha) / a0 / 2.0));
+    let c = [
+        (8192 + a2) / 2,
+        fit_i16(round(q13 * -2.0 * cos(w0) / a0)),
+        a2,
+    ];
+    assert!(c[0].abs() + c[1].abs() + c[2].abs() < 32767);
+    c
 }
 
 /// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its

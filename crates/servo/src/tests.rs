@@ -172,7 +172,7 @@ fn the_notch_removes_the_resonance_and_passes_steady_torque() {
                 peak = peak.max(y.abs());
             }
         }
-        peak as f64 / 65536.0
+        peak as f64 / 2048.0 // Q11
     };
     assert!(run(arm::LINK1.resonance_hz) < 0.05, "{}", run(212.0));
     assert!((run(5.0) - 1.0).abs() < 0.02, "{}", run(5.0));
@@ -181,7 +181,7 @@ fn the_notch_removes_the_resonance_and_passes_steady_torque() {
     for _ in 0..300 {
         y = n.filter(K1, q16(2.0));
     }
-    assert!((y - q16(2.0)).abs() <= 2, "{y}");
+    assert!((y - 2 * 2048).abs() <= 1, "{y}");
 }
 
 #[test]
