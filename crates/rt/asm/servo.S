@@ -42,6 +42,7 @@
     .equ K_CPER, 108
     .equ K_YLPER, 112
     .equ K_DAC_Q5, 128
+    .equ K_SATARG, 132
     /* Observer */
     .equ O_THETA, 0
     .equ O_OMEGA, 4
@@ -60,7 +61,7 @@
     .equ N_Y2, 44
     .equ S_TORQUE, 48
     /* sizes of LinkConst, Observer, LinkState */
-    .equ LINK_CONST_BYTES, 136
+    .equ LINK_CONST_BYTES, 140
     .equ OBSERVER_BYTES, 8
     .equ LINK_STATE_BYTES, 52
     /* servo::MAX_DT_Q32 (10 ms), regs::servo::DAC_MAX / DAC_MIN */
@@ -240,10 +241,12 @@ __fx_mul_floor_shr24:
  * which stays below 2^32). No divide (DIVU.L is 92 cycles on the 68020). For smaller n digit
  * by digit, 16 rounds of compare, subtract and shift. Bit-identical to host_sqrt_q16 in
  * crates/fx/src/lib.rs. */
-.macro SQRT_Q16 x, r, t, u, s, a
+.macro SQRT_Q16 x, r, t, u, s, a, zdone
+  .ifb \zdone
     tst.l   \x
     ble     .Lqz\@
     bfffo   \x{#0:#32}, \s      /* leading zeros, 0..31 */
+  .endif                        /* (zdone: the caller has x > 0 and s its leading zeros) */
     andi.l  #30, \s             /* even */
     cmpi.l  #16, \s
     bls.s   .Lq1\@
@@ -558,8 +561,43 @@ servo_control_body:
 1:  moveq   #1, %d5             /* sliding */
     move.l  E_TWOA(%a3), %d0
     MULSHR  %d0, %d6, 16, %d1, %d7, %d7
-    SQRT_Q16 %d0, %d1, %d4, %d6, %d7, %a0
-    sub.l   E_C(%a3), %d0       /* v = sqrt(2A d) - c */
+    /* The square root is at least L = 2^(k / 2 + 8) for x in [2^k, 2^(k+1)) (the floor
+     * of sqrt(x 2^s), shifted, as SQRT_Q16 takes it), so f - omega is at most c - L - omega
+     * (err > 0) or at least L - c - omega (err < 0): beyond sat_arg that way, the law
+     * saturates whatever the root (servo::params::LinkConst::sat_arg_q16), and the root,
+     * the product by b and the clamp are left out: most of an acceleration at full torque.
+     * (An add that overflows takes the whole way.) */
+    tst.l   %d0
+    ble     25f
+    bfffo   %d0{#0:#32}, %d7    /* z, kept for SQRT_Q16 */
+    moveq   #31, %d1
+    sub.l   %d7, %d1
+    lsr.l   #1, %d1
+    addq.l  #8, %d1
+    moveq   #1, %d4
+    lsl.l   %d1, %d4            /* L */
+    sub.l   E_C(%a3), %d4       /* t = L - c */
+    tst.l   %d2
+    ble.s   24f
+    add.l   %d3, %d4            /* err > 0: c - L - omega <= -sat_arg? */
+    bvs.s   23f
+    cmp.l   K_SATARG(%a2), %d4
+    blt.s   23f
+    move.l  K_UMAX(%a2), %d0
+    neg.l   %d0                 /* -umax, saturated */
+    moveq   #0, %d5
+    bra     4f
+24: sub.l   %d3, %d4            /* err < 0: L - c - omega >= sat_arg? */
+    bvs.s   23f
+    cmp.l   K_SATARG(%a2), %d4
+    blt.s   23f
+    move.l  K_UMAX(%a2), %d0    /* umax, saturated */
+    moveq   #0, %d5
+    bra     4f
+25: moveq   #0, %d0             /* x <= 0: the root is 0 */
+    bra.s   26f
+23: SQRT_Q16 %d0, %d1, %d4, %d6, %d7, %a0, zdone
+26: sub.l   E_C(%a3), %d0       /* v = sqrt(2A d) - c */
     tst.l   %d2
     ble     2f
     neg.l   %d0                 /* err > 0: f = -v */
@@ -768,7 +806,7 @@ servo_control_body:
     .equ SV_MEMO_Q16, 172
     .equ SV_LOG, 180
     /* LinkConst::proximate */
-    .equ K_PROXIMATE, 132
+    .equ K_PROXIMATE, 136
     /* ArrestLog */
     .equ LOG_N, 0
     .equ LOG_KEPT, 4

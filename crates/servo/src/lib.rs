@@ -564,10 +564,11 @@ pub mod layout {
     const _: () = assert!(offset_of!(LinkConst, c_per_two_a_q32) == 108);
     const _: () = assert!(offset_of!(LinkConst, yl_per_two_a_q32) == 112);
     const _: () = assert!(offset_of!(LinkConst, dac_per_nm_q5) == 128);
-    const _: () = assert!(offset_of!(LinkConst, proximate) == 132);
+    const _: () = assert!(offset_of!(LinkConst, sat_arg_q16) == 132);
+    const _: () = assert!(offset_of!(LinkConst, proximate) == 136);
     /// Bytes of one link's constants (`repr(C, align(4))`: the same on the 68020, where an
     /// `i32` aligns to 2, as on the host).
-    pub const LINK_CONST_BYTES: usize = 136;
+    pub const LINK_CONST_BYTES: usize = 140;
     const _: () = assert!(size_of::<LinkConst>() == LINK_CONST_BYTES);
     const _: () = assert!(offset_of!(Observer, theta_q24) == 0);
     const _: () = assert!(offset_of!(Observer, omega_q16) == 4);
@@ -705,6 +706,7 @@ pub mod layout {
             k.yl_q16,
             k.c_q16,
             k.dac_per_nm_q5,
+            k.sat_arg_q16,
         ]);
         b[offset_of!(LinkConst, proximate)] = k.proximate as u8;
         b

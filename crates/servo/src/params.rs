@@ -259,6 +259,11 @@ pub struct LinkConst {
     /// DAC codes per N m, Q5, within i16: the law's code from its torque in Q11
     /// ([`crate::dac_code_q11`], one `MULS.W` on the 68020).
     pub dac_per_nm_q5: i32,
+    /// The least a, Q16 rad/s, with b a beyond umax and -b a beyond -umax
+    /// (`mul_shr(b_q16, +-a, 16)`, and so for every larger a): a speed error f - omega at
+    /// least this far out saturates the proximate law whatever its exact value (the image
+    /// then skips the square root; crates/rt/asm/servo.S).
+    pub sat_arg_q16: i32,
     /// Run [`crate::proximate_law`] (else [`crate::law`]).
     pub proximate: bool,
 }
@@ -302,6 +307,7 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
     let c_per_two_a_q32 = fit(round(Q32 * b / (4.0 * kp)));
     let yl_per_two_a_q32 = fit(round(Q32 * (b / (2.0 * kp)) * (b / (2.0 * kp))));
     let two_a_q16 = fit(round(Q16 * 2.0 * p.uhat_nm / (prior * l.inertia_kgm2)));
+    let (b_q16, umax_q16) = (fit(round(Q16 * b)), fit(round(Q16 * p.umax_nm)));
     // The image's near-goal corrections (crates/rt/asm/servo.S) take mul_shr(u, 10, 16) as
     // 10 u, exact for |u| <= umax only below this, and +-friction as never overflowing.
     // Its observer takes an innovation within MAX_INNOVATION_Q16 as plausible without the
@@ -315,7 +321,7 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
             Q32 * core::f64::consts::TAU / l.counts_per_rev as f64,
         )),
         inv_inertia_q16: fit(round(Q16 / l.inertia_kgm2)),
-        umax_q16: fit(round(Q16 * p.umax_nm)),
+        umax_q16,
         uhat_over_umax_q16: fit(round(Q16 * p.uhat_nm / p.umax_nm)),
         inv_omega_sat_q16: fit(round(Q16 / p.omega_sat_rad_s)),
         eps_q16: fit(round(Q16 * p.eps)),
@@ -346,7 +352,7 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         omega_limit_q16: fit(round(Q16 * 2.0 * l.max_speed_rad_s)),
         linear_band_q16: fit(round(Q16 * p.s_sat_rad)),
         uhat_q16: fit(round(Q16 * p.uhat_nm)),
-        b_q16: fit(round(Q16 * b)),
+        b_q16,
         slope_q16: fit(round(Q16 * kp / b)),
         c_per_two_a_q32,
         yl_per_two_a_q32,
@@ -354,8 +360,26 @@ pub const fn link_const_at(l: &Link, p: &LawParams, period_s: f64) -> LinkConst 
         yl_q16: fx::host_mul_shr(two_a_q16, yl_per_two_a_q32, 32),
         c_q16: fx::host_mul_shr(two_a_q16, c_per_two_a_q32, 32),
         dac_per_nm_q5: fit_i16(round(32.0 / nm_per_code)),
+        sat_arg_q16: sat_arg(b_q16, umax_q16),
         proximate: p.proximate,
     }
+}
+
+/// [`LinkConst::sat_arg_q16`] for the law's b and umax (Q16): the least a with
+/// `mul_shr(b, a, 16) > umax` and `mul_shr(b, -a, 16) < -umax`, from just below the
+/// estimate (umax + 1) / b up (both products only grow in |a|).
+const fn sat_arg(b_q16: i32, umax_q16: i32) -> i32 {
+    assert!(b_q16 > 0 && umax_q16 > 0);
+    let mut a = (((umax_q16 as i64 + 1) << 16) / b_q16 as i64 - 2) as i32;
+    if a < 1 {
+        a = 1;
+    }
+    while !(fx::host_mul_shr(b_q16, a, 16) > umax_q16
+        && fx::host_mul_shr(b_q16, -a, 16) < -umax_q16)
+    {
+        a += 1;
+    }
+    a
 }
 
 /// Notch biquad at `hz` with quality `q` for period `period_s` (bilinear design with
