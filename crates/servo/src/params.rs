@@ -409,10 +409,10 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
 }
 
 /// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its
-/// common pass takes 5,961 cycles at rest, 6,552 on the braking curve (a square root a
-/// link) and 5,917 holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host
-/// profile servo`, `--servo-goal-urad`), and 6,095 on average in fig. VI.5's image run
-/// (docs/servo.md). 3 kHz leaves 5,566.
+/// common pass takes 5,639 cycles at rest, 5,719 accelerating at full torque and 5,578
+/// holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host profile servo`,
+/// `--servo-goal-urad`), and 5,755 on average in fig. VI.5's image run (docs/servo.md).
+/// 3 kHz leaves 5,566.
 pub const IMAGE_HZ: f64 = 2400.0;
 
 /// Near-goal frequencies of the tuned law at [`IMAGE_HZ`], Hz (critically damped): the
