@@ -41,6 +41,14 @@ struct PassState {
     torn: u8,
     /// The servo's output of the last pass (written in place: `Servo::step_into`).
     out: Output,
+    /// The state of the last pass that computed the arrest points, published on the next:
+    /// angles, speeds, arrest points and torques (Q16, as in `Output`), its time (us) and
+    /// pass count. One pass computes the arrest points, the next publishes them with the
+    /// angles they were computed from (a record whose arrest points lagged its angles by a
+    /// pass kept an arm braked at a wall flipping between two counts; fig. V.9).
+    snap: [i32; 8],
+    snap_t_us: u32,
+    snap_loops: u32,
     servo: Servo,
 }
 
@@ -126,6 +134,9 @@ impl Board {
                 has_sub: false,
                 torn: 0,
                 out: Output::IDLE,
+                snap: [0; 8],
+                snap_t_us: 0,
+                snap_loops: 0,
                 servo: Servo::with_links(links),
             },
         }
@@ -247,20 +258,30 @@ impl PassState {
         }
         self.ticks += out.period_ticks as u64;
         self.loops = self.loops.wrapping_add(1);
+        // The state every other pass: a pass that computed the arrest points keeps its
+        // state, the next publishes it (no pass does both; docs/servo.md).
+        if out.arrest_new {
+            let [t, w, a, u] = [out.theta_q16, out.omega_q16, out.arrest_q16, out.torque_q16];
+            self.snap = [t[0], t[1], w[0], w[1], a[0], a[1], u[0], u[1]];
+            self.snap_t_us = (self.ticks >> 1) as u32;
+            self.snap_loops = self.loops;
+            return self.verdict();
+        }
+        let v = &self.snap;
         // Q16 N m to mN m in 32 bits: torques are within umax (13 N m, < 2^20 in Q16), so the
         // product stays below 2^31 (an i64 product here cost a __muldi3 call per pass).
         let mnm = |q: i32| (q * 1000) >> 16;
         let state = ServoState {
-            theta1_urad: q16_to_urad(out.theta_q16[0]),
-            theta2_urad: q16_to_urad(out.theta_q16[1]),
-            omega1_urad_s: q16_to_urad(out.omega_q16[0]),
-            omega2_urad_s: q16_to_urad(out.omega_q16[1]),
-            arrest1_urad: q16_to_urad(out.arrest_q16[0]),
-            arrest2_urad: q16_to_urad(out.arrest_q16[1]),
-            torque1_mnm: mnm(out.torque_q16[0]),
-            torque2_mnm: mnm(out.torque_q16[1]),
-            t_us: (self.ticks >> 1) as u32,
-            loops: self.loops,
+            theta1_urad: q16_to_urad(v[0]),
+            theta2_urad: q16_to_urad(v[1]),
+            omega1_urad_s: q16_to_urad(v[2]),
+            omega2_urad_s: q16_to_urad(v[3]),
+            arrest1_urad: q16_to_urad(v[4]),
+            arrest2_urad: q16_to_urad(v[5]),
+            torque1_mnm: mnm(v[6]),
+            torque2_mnm: mnm(v[7]),
+            t_us: self.snap_t_us,
+            loops: self.snap_loops,
         };
         vme_map::SERVO_STATE.publish_raw(g, &state.to_words());
         self.verdict()
@@ -302,7 +323,10 @@ mod layout {
     const _: () = assert!(offset_of!(PassState, has_sub) == 24);
     const _: () = assert!(offset_of!(PassState, torn) == 25);
     const _: () = assert!(offset_of!(PassState, out) == 26);
-    const _: () = assert!(offset_of!(PassState, servo) == 80);
+    const _: () = assert!(offset_of!(PassState, snap) == 80);
+    const _: () = assert!(offset_of!(PassState, snap_t_us) == 112);
+    const _: () = assert!(offset_of!(PassState, snap_loops) == 116);
+    const _: () = assert!(offset_of!(PassState, servo) == 120);
     const _: () = assert!(offset_of!(Ports, latch) == 0);
     const _: () = assert!(offset_of!(Ports, enc0) == 4);
     const _: () = assert!(offset_of!(Ports, enc1) == 8);

@@ -264,6 +264,10 @@ const fn brake_u_s2(l: &arm::Link) -> i32 {
     (acc * 32768.0 / (2.0 * core::f64::consts::PI)) as i32
 }
 
+/// [`REST_URAD_S`] in angle units per second (rounded up).
+const REST_U_S: i32 =
+    (REST_URAD_S as f64 * 32768.0 / (2.0 * core::f64::consts::PI * 1e6)) as i32 + 1;
+
 /// 10^6 / [`BRAKE_U_S2`], Q24: microseconds to stop per (angle unit / s) of speed.
 const STOP_US_PER_U_S_Q24: [i32; 2] = [
     (16_777_216.0 * 1e6 / BRAKE_U_S2[0] as f64) as i32,
@@ -285,6 +289,8 @@ pub struct Reflex {
     same_loops: u32,
     torn: u32,
     last_t_us: u32,
+    /// The last three intervals between the servo states read (us, at most 2^30).
+    recent_dt_us: [i32; 3],
     now_us: u32,
     started_us: u32,
     healthy_once: bool,
@@ -330,6 +336,7 @@ impl Reflex {
             same_loops: 0,
             torn: 0,
             last_t_us: 0,
+            recent_dt_us: [0; 3],
             now_us: 0,
             started_us: 0,
             healthy_once: false,
@@ -392,6 +399,15 @@ impl Reflex {
         self.last_t_us = sv.t_us;
         self.now_us = sv.t_us;
         out.dt_us = dt_us;
+        // The pass time the latency margins assume: the longest of the last four intervals
+        // between the servo states read. The servo publishes every other pass of its own,
+        // so the intervals one pass sees alternate (0.67 and 1.33 ms at 1 kHz against the
+        // servo's 1.5 kHz of states) and margins that followed them put an arm braked at a
+        // wall between two subgoals a count apart, pass after pass (fig. V.9).
+        let d = dt_us.min(1 << 30) as i32;
+        let [d1, d2, d3] = self.recent_dt_us;
+        let pass_us = masks::max(masks::max(d, d1), masks::max(d2, d3));
+        self.recent_dt_us = [d, d1, d2];
 
         // The inputs must be good; until they first are, the arm holds without a fault.
         let problem = self.monitor.observe(&inp.health, self.now_us);
@@ -468,7 +484,7 @@ impl Reflex {
         // Logged only on passes that got this far (a pass that holds needs no log).
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
-        self.window(sv, goal, dt_us, inp.obstacles_moving, map, &mut out);
+        self.window(sv, goal, pass_us, inp.obstacles_moving, map, &mut out);
         out
     }
 
@@ -505,7 +521,7 @@ impl Reflex {
         &mut self,
         sv: ServoView,
         goal_urad: [i32; 2],
-        dt_us: u32,
+        pass_us: i32,
         moving: bool,
         map: &mut M,
         out: &mut Output,
@@ -514,7 +530,7 @@ impl Reflex {
         // Latency: the state is up to a pass old when read, and the subgoal waits up to a
         // pass for the servo; twice the pass time plus half a millisecond, 1 ms passes at
         // least, 10 ms at most.
-        let lat_us = 2 * masks::clamp(dt_us.min(1 << 30) as i32, 1000, 10_000) + 500;
+        let lat_us = 2 * masks::clamp(pass_us, 1000, 10_000) + 500;
         let mut a1 = Axis::default();
         let mut a2 = Axis::default();
         prepare(&mut a1, 0, &sv, &prev, &goal_urad, lat_us);
@@ -747,7 +763,11 @@ fn prepare(a: &mut Axis, i: usize, sv: &ServoView, prev: &[i32; 2], goal: &[i32;
     a.reach_u = fx::mul_shr(w, lat_q32, 32) + 1;
     a.adv = 2 * a.reach_u;
     a.back = a.omega_urad_s >> 31;
-    a.stop_us = fx::mul_shr(w, STOP_US_PER_U_S_Q24[i], 24);
+    // Below the rest threshold, the stop time of the threshold's speed: the margin that
+    // follows it then stays put while the arm rests (an arm braked at a wall, its speed
+    // jittering by a few mrad/s, otherwise moved its subgoal a count back and forth with
+    // it; fig. V.9), and it is never below the true one.
+    a.stop_us = fx::mul_shr(masks::max(w, REST_U_S), STOP_US_PER_U_S_Q24[i], 24);
 }
 
 /// The axis's base rectangle, arrest region and own neighbourhood, with `obs` the margin for

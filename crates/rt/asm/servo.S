@@ -361,6 +361,7 @@ __servo_observe2:
     movea.l 44(%sp), %a2
     move.l  52(%sp), %d3
     bsr     servo_observe_body
+    bsr     servo_arrest_body
     movea.l 56(%sp), %a1
     move.l  %d0, 8(%a1)
     addq.l  #4, %a3             /* link 2 */
@@ -375,6 +376,7 @@ __servo_observe2:
     lea     LINK_STATE_BYTES(%a2), %a2
     move.l  52(%sp), %d3
     bsr     servo_observe_body
+    bsr     servo_arrest_body
     movea.l 56(%sp), %a1
     move.l  %d0, 12(%a1)
     movem.l (%sp)+, %d2-%d7/%a2-%a3
@@ -393,6 +395,7 @@ __servo_observe:
     move.l  44(%sp), %d2
     move.l  48(%sp), %d3
     bsr     servo_observe_body
+    bsr     servo_arrest_body
     movem.l (%sp)+, %d2-%d7/%a2
     rts
 
@@ -477,21 +480,25 @@ servo_observe_body:
     SATV    %d0
     CLAMP   %d0, K_OMLIM(%a0), %d1
     move.l  %d0, O_OMEGA(%a1)
-    /* arrest = sat(y + mul_shr(mul_shr(omega, brake, 24), |omega|, 24)) */
+    rts
+9:  /* implausible: re-lock at rest on the measurement (theta24 = y << 8, wrapping) */
+    move.l  %d2, %d0
+    lsl.l   #8, %d0
+    move.l  %d0, O_THETA(%a1)
+    clr.l   O_OMEGA(%a1)
+    moveq   #0, %d0
+    rts
+
+/* d0 = the arrest point sat(y + mul_shr(mul_shr(omega, brake, 24), |omega|, 24)) for
+ * d0 = omega, d2 = y, a2 = s (its brake); d1, d5, d7 clobbered. (After a re-lock, omega 0:
+ * y.) */
+servo_arrest_body:
     move.l  %d0, %d5
     MULSHR  %d0, E_BRAKE(%a2), 24, %d1, %d7, %d7
     SATABS  %d5
     MULSHR  %d0, %d5, 24, %d1, %d7, %d7
     add.l   %d2, %d0
     SATV    %d0
-    rts
-9:  /* implausible: re-lock at rest on the measurement (theta24 = y << 8, wrapping);
-     * the arrest point is then y */
-    move.l  %d2, %d0
-    lsl.l   #8, %d0
-    move.l  %d0, O_THETA(%a1)
-    clr.l   O_OMEGA(%a1)
-    move.l  %d2, %d0
     rts
 
 /* ---- the law of both links ----
@@ -804,7 +811,10 @@ servo_control_body:
     .equ SV_HOLD, 163
     .equ SV_MEMO_URAD, 164
     .equ SV_MEMO_Q16, 172
-    .equ SV_LOG, 180
+    .equ SV_ARREST, 180
+    .equ SV_CLOCK, 188
+    .equ SV_ARREST_DUE, 192
+    .equ SV_LOG, 194
     /* LinkConst::proximate */
     .equ K_PROXIMATE, 136
     /* ArrestLog */
@@ -824,6 +834,7 @@ servo_control_body:
     .equ F_HOLD, 48
     .equ F_NEW_FAULT, 49
     .equ F_REGIME, 50
+    .equ F_ARREST_NEW, 52
     .equ HOLD_NONE, 255         /* Option<Hold>::None (this rustc puts the niche at 255) */
     .equ HOLD_STALE, 1          /* servo::Hold::Stale, OutOfRange (repr(u8)) */
     .equ HOLD_OUT_OF_RANGE, 3
@@ -944,7 +955,7 @@ servo_pass_body:
     move.l  (%a0), SV_LAST_ENC(%a6)
     move.w  4(%a0), SV_LAST_TIMER(%a6)
     movea.l %d3, %a5            /* dt */
-    /* link 1: the angle, the observer, the arrest point */
+    /* link 1: the angle, the observer */
     movea.l SV_LINKS(%a6), %a0
     lea     SV_COUNTS(%a6), %a3
     bsr     servo_angle
@@ -953,7 +964,7 @@ servo_pass_body:
     lea     SV_LAW(%a6), %a2
     move.l  %a5, %d3
     bsr     servo_observe_body
-    move.l  %d0, F_ARREST(%a4)
+    move.l  %d0, F_OMEGA(%a4)
     /* link 2 */
     lea     LINK_CONST_BYTES(%a0), %a0
     addq.l  #4, %a3
@@ -963,31 +974,42 @@ servo_pass_body:
     lea     SV_LAW+LINK_STATE_BYTES(%a6), %a2
     move.l  %a5, %d3
     bsr     servo_observe_body
-    move.l  %d0, F_ARREST+4(%a4)
-    move.l  SV_OBS+O_OMEGA(%a6), F_OMEGA(%a4)
-    move.l  SV_OBS+OBSERVER_BYTES+O_OMEGA(%a6), F_OMEGA+4(%a4)
-    /* the arrest log: at the newest time + dt >> 8 (Q24 s) */
-    lea     SV_LOG(%a6), %a0
-    move.l  LOG_N(%a0), %d0
-    move.l  %d0, %d1
-    subq.l  #1, %d1
-    andi.l  #127, %d1
-    add.l   %d1, %d1
-    add.l   %d1, %d1
-    move.l  LOG_T(%a0,%d1.l), %d2
+    move.l  %d0, F_OMEGA+4(%a4)
+    /* the log's clock += dt >> 8 (Q24 s); every other pass the arrest points, kept and
+     * logged at it (servo::Servo::log_arrest) */
     move.l  %a5, %d1
     asr.l   #8, %d1
-    add.l   %d1, %d2
-    move.l  %d0, %d1
-    andi.l  #127, %d1
+    add.l   SV_CLOCK(%a6), %d1
+    move.l  %d1, SV_CLOCK(%a6)
+    tst.b   SV_ARREST_DUE(%a6)
+    bne.s   21f
+    move.b  #1, SV_ARREST_DUE(%a6)  /* not this pass: the last ones */
+    clr.b   F_ARREST_NEW(%a4)
+    bra     22f
+21: clr.b   SV_ARREST_DUE(%a6)
+    move.b  #1, F_ARREST_NEW(%a4)
+    lea     SV_LAW(%a6), %a2
+    move.l  F_THETA(%a4), %d2
+    move.l  F_OMEGA(%a4), %d0
+    bsr     servo_arrest_body
+    move.l  %d0, SV_ARREST(%a6)
+    lea     SV_LAW+LINK_STATE_BYTES(%a6), %a2
+    move.l  F_THETA+4(%a4), %d2
+    move.l  F_OMEGA+4(%a4), %d0
+    bsr     servo_arrest_body
+    move.l  %d0, SV_ARREST+4(%a6)
+    lea     SV_LOG(%a6), %a0
+    move.l  LOG_N(%a0), %d0
+    moveq   #127, %d1
+    and.l   %d0, %d1
     add.l   %d1, %d1
     add.l   %d1, %d1
-    move.l  %d2, LOG_T(%a0,%d1.l)
+    move.l  SV_CLOCK(%a6), LOG_T(%a0,%d1.l)
     add.l   %d1, %d1
     lea     LOG_ARREST(%a0), %a1
     adda.l  %d1, %a1
-    move.l  F_ARREST(%a4), (%a1)+
-    move.l  F_ARREST+4(%a4), (%a1)
+    move.l  SV_ARREST(%a6), (%a1)+
+    move.l  SV_ARREST+4(%a6), (%a1)
     addq.l  #1, %d0
     move.l  %d0, LOG_N(%a0)
     move.l  LOG_KEPT(%a0), %d0
@@ -996,6 +1018,8 @@ servo_pass_body:
     addq.l  #1, %d0
     sub.l   %d1, %d0
     move.l  %d0, LOG_KEPT(%a0)
+22: move.l  SV_ARREST(%a6), F_ARREST(%a4)
+    move.l  SV_ARREST+4(%a6), F_ARREST+4(%a4)
     /* the goal: holding, the hold goal; else urad_to_q16 of both (mul_shr(g,
      * URAD_TO_Q16_Q32, 32)), converted again only when they changed (servo::Servo::goal_q16's
      * memo) */
@@ -1087,7 +1111,10 @@ servo_pass_body:
     .equ B_HAS_SUB, 24
     .equ B_TORN, 25
     .equ B_OUT, 26
-    .equ B_SERVO, 80
+    .equ B_SNAP, 80
+    .equ B_SNAP_T, 112
+    .equ B_SNAP_LOOPS, 116
+    .equ B_SERVO, 120
     /* Ports */
     .equ P_LATCH, 0
     .equ P_ENC0, 4
@@ -1199,23 +1226,7 @@ __servo_board_pass:
     move.w  %d0, (%a0)
     movea.l P_AMP(%a3), %a0
     move.w  #AMP_BOTH, (%a0)
-    /* the state, built on the stack: ten words */
-    lea     -40(%sp), %sp
-    movea.l %sp, %a1
-    lea     B_OUT+F_THETA(%a2), %a0 /* theta, omega, arrest: six words in a row */
-    moveq   #10, %d3
-    .rept 6
-    move.l  (%a0)+, %d0
-    Q16_TO_URAD %d0, %d1, %d2, %d3
-    move.l  %d0, (%a1)+
-    .endr
-    move.l  (%a0)+, %d0         /* the torques */
-    MNM     %d0, %d1
-    move.l  %d0, (%a1)+
-    move.l  (%a0), %d0
-    MNM     %d0, %d1
-    move.l  %d0, (%a1)+
-    /* ticks += period (u64); t_us = ticks >> 1 (low 32 bits); loops += 1 */
+    /* ticks += period (u64); t_us = ticks >> 1 (low 32 bits) in d5; loops += 1 in d4 */
     moveq   #0, %d0
     move.w  B_OUT+F_TICKS(%a2), %d0
     move.l  B_TICKS(%a2), %d1
@@ -1227,11 +1238,41 @@ __servo_board_pass:
     move.l  %d2, B_TICKS+4(%a2)
     lsr.l   #1, %d1             /* X = the high word's low bit */
     roxr.l  #1, %d2
-    move.l  %d2, (%a1)+
-    move.l  B_LOOPS(%a2), %d0
-    addq.l  #1, %d0
-    move.l  %d0, B_LOOPS(%a2)
-    move.l  %d0, (%a1)
+    move.l  %d2, %d5
+    move.l  B_LOOPS(%a2), %d4
+    addq.l  #1, %d4
+    move.l  %d4, B_LOOPS(%a2)
+    /* the state every other pass: a pass that computed the arrest points keeps its
+     * state (angles, speeds, arrest points, torques: eight words in a row from theta; its
+     * time and count), the next publishes it */
+    tst.b   B_OUT+F_ARREST_NEW(%a2)
+    beq.s   27f
+    lea     B_OUT+F_THETA(%a2), %a0
+    lea     B_SNAP(%a2), %a1
+    .rept 8
+    move.l  (%a0)+, (%a1)+
+    .endr
+    move.l  %d5, (%a1)+         /* B_SNAP_T */
+    move.l  %d4, (%a1)          /* B_SNAP_LOOPS */
+    bra     .Lbp_done
+27: /* the kept state, built on the stack: ten words */
+    lea     -40(%sp), %sp
+    movea.l %sp, %a1
+    lea     B_SNAP(%a2), %a0    /* theta, omega, arrest: six words in a row */
+    moveq   #10, %d3
+    .rept 6
+    move.l  (%a0)+, %d0
+    Q16_TO_URAD %d0, %d1, %d2, %d3
+    move.l  %d0, (%a1)+
+    .endr
+    move.l  (%a0)+, %d0         /* the torques */
+    MNM     %d0, %d1
+    move.l  %d0, (%a1)+
+    move.l  (%a0)+, %d0
+    MNM     %d0, %d1
+    move.l  %d0, (%a1)+
+    move.l  (%a0)+, (%a1)+      /* t_us */
+    move.l  (%a0), (%a1)        /* loops */
     /* publish: sequence odd ((seq | 1) + 2 when a writer died mid-write), the words, even */
     movea.l P_STATE(%a3), %a0
     move.l  (%a0), %d0
@@ -1248,7 +1289,9 @@ __servo_board_pass:
     addq.l  #1, %d0
     movea.l P_STATE(%a3), %a0
     move.l  %d0, (%a0)
-    lea     46(%sp), %sp
+    lea     40(%sp), %sp
+.Lbp_done:
+    addq.l  #6, %sp
     moveq   #1, %d0
     movem.l (%sp)+, %d2-%d7/%a2-%a6
     rts

@@ -610,6 +610,7 @@ pub mod layout {
         assert!(offset_of!(Output, hold) == 48);
         assert!(offset_of!(Output, new_fault) == 49);
         assert!(offset_of!(Output, regime) == 50);
+        assert!(offset_of!(Output, arrest_new) == 52);
     };
     const _: () = assert!(size_of::<Option<super::Hold>>() == 1);
     // SAFETY: `Option<Hold>` is one byte (asserted above); reading `None`'s byte. (Where
@@ -654,7 +655,10 @@ pub mod layout {
         assert!(offset_of!(Servo, hold) == 163);
         assert!(offset_of!(Servo, goal_memo_urad) == 164);
         assert!(offset_of!(Servo, goal_memo_q16) == 172);
-        assert!(offset_of!(Servo, log) == 180);
+        assert!(offset_of!(Servo, arrest_q16) == 180);
+        assert!(offset_of!(Servo, clock_q24) == 188);
+        assert!(offset_of!(Servo, arrest_due) == 192);
+        assert!(offset_of!(Servo, log) == 194);
         assert!(ArrestLog::N_OFFSET == 0 && ArrestLog::KEPT_OFFSET == 4);
         assert!(ArrestLog::T_OFFSET == 8 && ArrestLog::ARREST_OFFSET == 8 + 4 * PASSES);
         assert!(PASSES == 128);
@@ -814,6 +818,9 @@ pub struct Output {
     pub new_fault: Option<Hold>,
     /// The law's regime per link.
     pub regime: [Regime; 2],
+    /// Set on the passes that computed `arrest_q16` (every other pass; the others carry
+    /// the last): the board publishes its state on the others, so that no pass does both.
+    pub arrest_new: bool,
 }
 
 impl Output {
@@ -823,7 +830,7 @@ impl Output {
     /// The output as the words the servo image's test probe writes a pass (and the system
     /// test compares with the host's): both DAC codes, both velocities, angles, arrest
     /// points, goals and torques (Q16), the period in ticks, the hold and the new fault (0
-    /// none, else 1 + [`Hold`]), `regime 1 << 8 | regime 2 | enable << 16`.
+    /// none, else 1 + [`Hold`]), `regime 1 << 8 | regime 2 | enable << 16 | arrest_new << 17`.
     pub fn probe_words(&self) -> [i32; Self::PROBE_WORDS] {
         let hold = |h: Option<Hold>| h.map_or(0, |h| 1 + h as i32);
         [
@@ -842,7 +849,10 @@ impl Output {
             self.period_ticks as i32,
             hold(self.hold),
             hold(self.new_fault),
-            (self.regime[0] as i32) << 8 | self.regime[1] as i32 | (self.enable as i32) << 16,
+            (self.regime[0] as i32) << 8
+                | self.regime[1] as i32
+                | (self.enable as i32) << 16
+                | (self.arrest_new as i32) << 17,
         ]
     }
 
@@ -859,6 +869,7 @@ impl Output {
         hold: None,
         new_fault: None,
         regime: [Regime::Linear; 2],
+        arrest_new: false,
     };
 }
 
@@ -890,6 +901,14 @@ pub struct Servo {
     /// The last subgoal converted ([`Servo::goal_q16`]): its angles in urad and in Q16.
     goal_memo_urad: [i32; 2],
     goal_memo_q16: [i32; 2],
+    /// The arrest points, Q16 rad, computed and logged every other pass (`arrest_due`; the
+    /// passes between carry them): the board publishes its state on those between, so the
+    /// two halve each other's cost in the image's pass (docs/servo.md).
+    arrest_q16: [i32; 2],
+    /// The log's clock: the sum of the pass periods, Q24 s.
+    clock_q24: u32,
+    /// Whether this pass computes and logs the arrest points.
+    arrest_due: bool,
     /// The arrest points of the last passes: a hold for a subgoal that stopped coming holds
     /// at the arrest point of the moment it stopped.
     log: arrest_log::ArrestLog,
@@ -927,6 +946,9 @@ impl Servo {
             hold: None,
             goal_memo_urad: [0; 2],
             goal_memo_q16: [0; 2],
+            arrest_q16: [0; 2],
+            clock_q24: 0,
+            arrest_due: false,
             log: arrest_log::ArrestLog::new(),
         }
     }
@@ -971,10 +993,12 @@ impl Servo {
         // The observers start at rest: until they have locked onto a link that was already
         // moving, the velocity they report is not the torque's doing.
         let settled = self.observers_settled(dt_q32);
-        let (theta, arrest) = self.observe_both(dt_q32);
+        let (theta, arrest_now) = self.observe_both(dt_q32);
         let omega = [self.obs[0].omega_q16, self.obs[1].omega_q16];
+        let arrest_new = self.log_arrest(dt_q32, arrest_now);
+        let arrest = self.arrest_q16;
         // The goal: the subgoal while it is fresh and plausible, else hold at the arrest point.
-        let (goal, new_fault) = self.log_and_choose_goal(input.subgoal, dt_q32, arrest, false);
+        let (goal, new_fault) = self.choose_goal(input.subgoal, dt_q32, arrest, false);
         let err = [theta[0] - goal[0], theta[1] - goal[1]];
         let ([d0, d1], [r0, r1]) = self.control_both(err, omega, dt_q32, settled);
         let [l0, l1] = &self.law;
@@ -990,6 +1014,7 @@ impl Servo {
             hold: self.hold,
             new_fault,
             regime: [r0, r1],
+            arrest_new,
         }
     }
 
@@ -1004,9 +1029,11 @@ impl Servo {
         let theta = [self.angle(0), self.angle(1)];
         self.started = true;
         self.obs = [Observer::at(theta[0]), Observer::at(theta[1])];
-        // At rest: the arrest point is the angle.
+        // At rest: the arrest point is the angle (computed and logged on this pass).
         let arrest = theta;
-        let (goal, new_fault) = self.log_and_choose_goal(input.subgoal, dt_q32, arrest, true);
+        self.arrest_due = true;
+        self.log_arrest(dt_q32, arrest);
+        let (goal, new_fault) = self.choose_goal(input.subgoal, dt_q32, arrest, true);
         for (s, k) in self.law.iter_mut().zip(self.links) {
             s.est.observe(k, false, 0, 0, dt_q32);
             s.torque_q16 = 0;
@@ -1023,6 +1050,7 @@ impl Servo {
             hold: self.hold,
             new_fault,
             regime: [Regime::Linear; 2],
+            arrest_new: true,
         }
     }
 
@@ -1165,21 +1193,18 @@ impl Servo {
         mul_shr(2 * self.counts[i] + 1, self.links[i].rad_per_count_q32, 17)
     }
 
-    /// Logs the pass's arrest points (the log's clock: the sum of the pass periods, Q24 s)
-    /// and chooses the goal.
+    /// Advances the log's clock by the pass (Q24 s); on every other pass (`arrest_due`)
+    /// keeps `arrest` as the arrest points and logs them. Returns whether this pass did.
     #[inline(always)]
-    fn log_and_choose_goal(
-        &mut self,
-        sub: Option<Subgoal>,
-        dt_q32: i32,
-        arrest: [i32; 2],
-        first: bool,
-    ) -> ([i32; 2], Option<Hold>) {
-        self.log.push(
-            self.log.newest_t().wrapping_add((dt_q32 >> 8) as u32),
-            arrest,
-        );
-        self.choose_goal(sub, dt_q32, arrest, first)
+    fn log_arrest(&mut self, dt_q32: i32, arrest: [i32; 2]) -> bool {
+        self.clock_q24 = self.clock_q24.wrapping_add((dt_q32 >> 8) as u32);
+        let due = self.arrest_due;
+        if due {
+            self.arrest_q16 = arrest;
+            self.log.push(self.clock_q24, arrest);
+        }
+        self.arrest_due = !due;
+        due
     }
 
     /// A subgoal's angles in Q16 ([`urad_to_q16`]), converted again only when they changed:
@@ -1252,7 +1277,7 @@ impl Servo {
                     // stop now, and the first pass, waiting for a first subgoal, has no log.)
                     self.hold_goal_q16 = match why {
                         Hold::Stale | Hold::Torn => self.log.at_age(
-                            self.log.newest_t(),
+                            self.clock_q24,
                             (self.since_cycle_q32 >> 8) as u32,
                             arrest,
                         ),
