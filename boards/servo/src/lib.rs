@@ -342,4 +342,7 @@ mod layout {
     const _: () = assert!(AmpCtrl::ENABLE0.bits() | AmpCtrl::ENABLE1.bits() == 3);
     const _: () = assert!(<vme_map::records::ReflexSubgoal as vme_map::record::Record>::WORDS == 4);
     const _: () = assert!(<vme_map::records::ServoState as vme_map::record::Record>::WORDS == 10);
+    // The subgoal record's tries (`SUB_TRIES`), as `SeqLock::read_raw` makes them.
+    const _: () =
+        assert!(vme_map::record::SeqLock::<vme_map::records::ReflexSubgoal>::RETRIES == 4);
 }
