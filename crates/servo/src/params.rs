@@ -408,20 +408,19 @@ const fn notch(hz: f64, q: f64, period_s: f64) -> [i32; 3] {
     c
 }
 
-/// The rate the servo image's main loop is paced at until it is fast enough for 3 kHz: its
-/// common pass takes 5,639 cycles at rest, 5,719 accelerating at full torque and 5,578
-/// holding, of the 6,958 a 2,400 Hz period has at 16.7 MHz (`sim-host profile servo`,
-/// `--servo-goal-urad`), and 5,755 on average in fig. VI.5's image run (docs/servo.md).
-/// 3 kHz leaves 5,566.
-pub const IMAGE_HZ: f64 = 2400.0;
+/// The rate the servo image's main loop is paced at: 3 kHz, the native board's, since
+/// 2026-11-26 (2,400 Hz before): its common pass takes 5,210 cycles at rest, 5,287
+/// accelerating at full torque and 5,153 holding, of the 5,561 a period of 666 ticks of the
+/// 2 MHz timer has at 16.7 MHz (`sim-host profile servo`, `--servo-goal-urad`), 5,294 on
+/// average in fig. VI.5's image run (docs/servo.md).
+pub const IMAGE_HZ: f64 = 3000.0;
 
-/// Near-goal frequencies of the tuned law at [`IMAGE_HZ`], Hz (critically damped): the
-/// bench's 3 rad step of link 1 at the image's rate reaches 2 counts by 0.2215 s with these
-/// at 2,400 Hz (40 / 17 Hz, the 1,500 and 2,000 Hz images' choice, took 0.2230 s there), and
-/// every step of the bench's sweep settles; with [`TUNED_NEAR_HZ`] itself at 1,500 Hz,
-/// fig. VI.5's image run ran into the reflex's escapes and ended in the goal's other pose
-/// (docs/servo.md).
-pub const IMAGE_NEAR_HZ: [f64; 2] = [42.0, 18.0];
+/// Near-goal frequencies of the tuned law at [`IMAGE_HZ`], Hz (critically damped): at
+/// 3 kHz the native board's own ([`TUNED_NEAR_HZ`]), so that the image runs the native law.
+/// (At 2,400 Hz the image ran 42 / 18 Hz, at 1,500-2,000 Hz 40 / 17 Hz: with
+/// [`TUNED_NEAR_HZ`] at 1,500 Hz fig. VI.5's image run ran into the reflex's escapes and
+/// ended in the goal's other pose; docs/servo.md.)
+pub const IMAGE_NEAR_HZ: [f64; 2] = TUNED_NEAR_HZ;
 
 /// The tuned law with the observer gains, notch and near-goal loop designed for
 /// [`IMAGE_HZ`]: what the servo image runs today.
