@@ -580,6 +580,16 @@ fn the_servo_board_image_passes_like_the_host() {
         }
         let hb = host.poll(&mut gb, &mut io);
         let mut want: Vec<u32> = (0..11).map(|k| gb.read_u32(state + 4 * k)).collect();
+        // The state every other pass: the pass after the one that computed the arrest
+        // points (the first did) publishes that pass's state, its count among it.
+        assert_eq!(
+            want[0],
+            2 * (i as u32).div_ceil(2),
+            "pass {i}: the state's sequence"
+        );
+        if i % 2 == 1 {
+            assert_eq!(want[10], i as u32, "pass {i}: the count of the pass before");
+        }
         want.extend([
             io.read16(DAC0) as u32,
             io.read16(DAC1) as u32,

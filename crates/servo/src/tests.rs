@@ -181,6 +181,8 @@ fn the_notch_removes_the_resonance_and_passes_steady_torque() {
     for _ in 0..300 {
         y = n.filter(K1, q16(2.0));
     }
+    // Within one Q11 step: b0 = (1 + a2) / 2 keeps the coefficients' gain at DC 1 (rounded
+    // independently, it was 0.1% off: 4,100 for 4,096); the filter's rounding leaves a step.
     assert!((y - 2 * 2048).abs() <= 1, "{y}");
 }
 
@@ -262,6 +264,40 @@ fn the_timer_and_counters_unwrap() {
         o.theta_q16[0]
     );
     assert_eq!(TIMER_TICK_Q40, 549_756);
+}
+
+#[test]
+fn the_arrest_points_come_every_other_pass_and_the_log_clock_every_pass() {
+    let mut s = Servo::new();
+    let mut outs = Vec::new();
+    let mut t = 0u16;
+    for k in 0..12 {
+        // Link 1 turning (its counts rising), toward a goal 0.5 rad out.
+        outs.push(s.step(&input([k * k * 30, 0], t, [0.5, 0.0], 1 + k as u32)));
+        t = t.wrapping_add(667);
+    }
+    for (k, o) in outs.iter().enumerate() {
+        assert_eq!(o.arrest_new, k % 2 == 0, "pass {k}");
+        if k % 2 == 1 {
+            // Carried: the last pass's.
+            assert_eq!(o.arrest_q16, outs[k - 1].arrest_q16, "pass {k}");
+        } else if k > 0 {
+            // Computed from this pass's angle and speed with the link's brake.
+            for i in 0..2 {
+                let want = arrest_point(s.law[i].est.brake_q32, o.theta_q16[i], o.omega_q16[i]);
+                assert_eq!(o.arrest_q16[i], want, "pass {k} link {i}");
+            }
+        }
+    }
+    // The link moved, so the arrest points did.
+    assert_ne!(outs[10].arrest_q16, outs[2].arrest_q16);
+    // The log holds the six passes that computed them; its clock counts all twelve periods
+    // (the first pass's period is its timer reading, 0).
+    let (n, kept, times, _) = s.log.raw();
+    assert_eq!((n, kept), (6, 6));
+    let dt_q24 = (fx::mul_shr(667, TIMER_TICK_Q40, 8) >> 8) as u32;
+    assert_eq!(s.clock_q24, 11 * dt_q24);
+    assert_eq!(times[5], 10 * dt_q24);
 }
 
 #[test]
