@@ -153,7 +153,8 @@ impl Board {
         self.shell.boot(g, || {});
     }
 
-    /// One pass of the main loop: sample, control, drive, publish. Returns the heartbeat.
+    /// One pass of the main loop: sample, control, drive, and publish the state (every other
+    /// pass: the one before's, `PassState::snap`). Returns the heartbeat.
     /// Generic over the bus: on the 68020 the global RAM's accesses are then inlined
     /// volatile moves, not dynamic calls.
     pub fn poll<G: GlobalBus + ?Sized>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
@@ -178,8 +179,8 @@ impl Board {
         self.shell.end(g, st)
     }
 
-    /// [`Board::poll`] as the image runs it: the common pass (a subgoal read whole at the
-    /// first try, the servo's common pass or a hold already under way: `Servo::step_into`)
+    /// [`Board::poll`] as the image runs it: the common pass (a subgoal read whole within
+    /// the record's four tries, the servo's common pass or a hold already under way: `Servo::step_into`)
     /// in one call of `__servo_board_pass`, which does what the Rust does, bit for bit
     /// (`the_servo_board_image_passes_like_the_host`), through the addresses `ports`; any
     /// other pass in the Rust. The routine decides before it changes anything but the

@@ -346,8 +346,9 @@ __fx_sqrt_table:
  *                       angles, then the two arrest points; per link
  *                       servo::LinkState::observe (the torque that acted and the
  *                       switching curve's brake come from s).
- * The body per link: a0 = k, a1 = o, a2 = s, d2 = y, d3 = dt; d0 = the arrest point;
- * d1-d7 clobbered. */
+ * The bodies per link: servo_observe_body (a0 = k, a1 = o, a2 = s, d2 = y, d3 = dt; d0 =
+ * the new speed, 0 after a re-lock; d1, d3-d7 clobbered), then servo_arrest_body (below;
+ * __servo_pass calls it every other pass only). */
     .section .text.__servo_observe2, "ax"
     .globl __servo_observe2
 __servo_observe2:
@@ -790,10 +791,10 @@ servo_control_body:
  * before: first, changing nothing, it checks those, the period and the subgoal's verdict;
  * a pass that is not that one (among them the first pass of a hold, whose goal comes from
  * the arrest log) returns 0, and the Rust then runs it. Otherwise, as the Rust does: the
- * extended counts, the period, the observers' settling clock, both links' angles,
- * observers and arrest points, the arrest log, the cycle's age, the hold and its fault,
- * the goal, both links' law; every field of out (servo::Output; the amplifiers enabled);
- * returns 1.
+ * extended counts, the period, the observers' settling clock, both links' angles and
+ * observers, the log's clock and, every other pass (servo::Servo::log_arrest), the arrest
+ * points and their log, the cycle's age, the hold and its fault, the goal, both links'
+ * law; every field of out (servo::Output; the amplifiers enabled); returns 1.
  * Offsets: servo::layout asserts them. */
     /* Servo */
     .equ SV_LAST_ENC, 2
@@ -1095,12 +1096,14 @@ servo_pass_body:
 
 /* ---- the board's common pass ----
  * u32 __servo_board_pass(PassState *b, const Ports *p): board_servo's PassState::run for a
- * pass whose subgoal record reads whole at the first try and whose servo pass is
+ * pass whose subgoal record reads whole within four tries and whose servo pass is
  * __servo_pass's: latch and read both encoders, read the timer, read the subgoal record
  * (sequence, four words, sequence) and keep it, run __servo_pass into b->out (the caller
  * reads its hold and new fault there), write both DACs and the amplifier enables, count
- * the time and the pass, and publish the servo state under its sequence lock (the six angles in urad as servo::q16_to_urad, the torques in
- * mN m). Returns 1; or 0 when the record is torn or was never published, or __servo_pass
+ * the time and the pass, and either keep the pass's state (a pass that computed the
+ * arrest points) or publish the state kept on the pass before under its sequence lock (the
+ * six angles in urad as servo::q16_to_urad, the torques in mN m). Returns 1; or 0 when the
+ * record is torn or was never published, or __servo_pass
  * returned 0, having changed nothing but the encoder latch and the subgoal kept (the Rust
  * then runs the pass and reads both again).
  * Offsets: board_servo's layout module asserts them. */
