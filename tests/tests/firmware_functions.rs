@@ -46,18 +46,18 @@ const BUF: u32 = 0x000C_0000;
 fn memcpy_memmove_memset_memcmp_match_the_host() {
     let (mut b, img, mut g) = board();
     let f = |n: &str| img.symbol(n).unwrap_or_else(|| panic!("{n} not in image"));
-    let pattern: Vec<u8> = (0..64u32).map(|i| (i * 37 + 11) as u8).collect();
-    for (dst_off, src_off, n) in [
-        (0u32, 100u32, 0u32),
-        (0, 100, 1),
-        (0, 100, 7),
-        (2, 102, 33),
-        (1, 100, 20),
-        (0, 101, 21),
-        (3, 97, 64),
-    ] {
+    let pattern: Vec<u8> = (0..160u32).map(|i| (i * 37 + 11) as u8).collect();
+    // Every length to 70 (the 32-byte passes, the 0-7 longs left, a word, a byte) at even
+    // and odd ends, and the longer ones.
+    let mut cases = vec![(3u32, 97u32, 64u32), (2, 100, 150), (0, 98, 96)];
+    for n in 0..=70 {
+        for (d, s) in [(0, 100), (2, 102), (0, 102), (1, 100), (0, 101), (1, 101)] {
+            cases.push((d, s, n));
+        }
+    }
+    for (dst_off, src_off, n) in cases {
         b.ram[BUF as usize..BUF as usize + 512].fill(0xEE);
-        b.ram[(BUF + 256) as usize..(BUF + 320) as usize].copy_from_slice(&pattern);
+        b.ram[(BUF + 256) as usize..(BUF + 416) as usize].copy_from_slice(&pattern);
         let (dst, src) = (BUF + dst_off, BUF + 256 + src_off - 100);
         let (ret, _) = b
             .call(&mut g, f("memcpy"), &[dst, src, n], 100_000)
@@ -79,18 +79,51 @@ fn memcpy_memmove_memset_memcmp_match_the_host() {
         }
     }
     // Overlapping memmove both ways.
-    for (d, s) in [(BUF + 5, BUF), (BUF, BUF + 5)] {
-        b.ram[BUF as usize..BUF as usize + 64].copy_from_slice(&pattern);
+    for (d, s, n) in [
+        (BUF + 5, BUF, 40),
+        (BUF, BUF + 5, 40),
+        (BUF, BUF + 4, 150),
+        (BUF + 4, BUF, 150),
+        (BUF + 2, BUF + 6, 77),
+    ] {
+        b.ram[BUF as usize..BUF as usize + 160].copy_from_slice(&pattern);
         let mut host = pattern.clone();
         let (d0, s0) = ((d - BUF) as usize, (s - BUF) as usize);
-        host.copy_within(s0..s0 + 40, d0);
-        b.call(&mut g, f("memmove"), &[d, s, 40], 100_000).unwrap();
-        assert_eq!(&b.ram[BUF as usize..BUF as usize + 64], &host[..]);
+        host.copy_within(s0..s0 + n as usize, d0);
+        b.call(&mut g, f("memmove"), &[d, s, n], 100_000).unwrap();
+        assert_eq!(&b.ram[BUF as usize..BUF as usize + 160], &host[..]);
     }
     b.call(&mut g, f("memset"), &[BUF + 3, 0x1A5, 9], 100_000)
         .unwrap();
     assert_eq!(&b.ram[(BUF + 3) as usize..(BUF + 12) as usize], &[0xA5; 9]);
     assert_ne!(b.ram[(BUF + 12) as usize], 0xA5);
+    // Every length to 70 at even and odd starts, zero (no spreading) and not, and a long one.
+    let mut sets: Vec<(u32, u32, u32)> = vec![(0, 0x5A, 200), (1, 0, 150)];
+    for n in 0..=70 {
+        for (d, c) in [(0, 0), (2, 0x1A5), (1, 0), (3, 0xC3)] {
+            sets.push((d, c, n));
+        }
+    }
+    for (d, c, n) in sets {
+        b.ram[BUF as usize..BUF as usize + 256].fill(0xEE);
+        let (ret, _) = b
+            .call(&mut g, f("memset"), &[BUF + d, c, n], 100_000)
+            .expect("memset returns");
+        assert_eq!(ret, BUF + d);
+        let (lo, hi) = ((BUF + d) as usize, (BUF + d + n) as usize);
+        assert!(
+            b.ram[lo..hi].iter().all(|&x| x == c as u8),
+            "memset({d},{c:#x},{n})"
+        );
+        assert_eq!(b.ram[hi], 0xEE, "memset({d},{c:#x},{n}) wrote past the end");
+        if d > 0 {
+            assert_eq!(
+                b.ram[lo - 1],
+                0xEE,
+                "memset({d},{c:#x},{n}) wrote before the start"
+            );
+        }
+    }
     b.ram[BUF as usize..BUF as usize + 4].copy_from_slice(b"abcd");
     b.ram[(BUF + 8) as usize..(BUF + 12) as usize].copy_from_slice(b"abzd");
     let cmp = |b: &mut EmuBoard, g: &mut Vec<u8>, n| {
@@ -713,7 +746,8 @@ fn read_words_copies_the_words_asked_for() {
     for k in 0..64u32 {
         ArrayBus::new(&mut g).write_u32(off + 4 * k, 0x1000_0000 + k * 0x0101);
     }
-    for n in [0u32, 1, 10, 33] {
+    // Every length to 40 (the eight-word passes and the 0-7 words left) and the longest.
+    for n in (0u32..=40).chain([63]) {
         b.ram[BUF as usize..BUF as usize + 256].fill(0xEE);
         b.call(&mut g, f, &[vme_map::GLOBAL_RAM_BASE + off, BUF, n], 10_000)
             .unwrap();
@@ -725,6 +759,65 @@ fn read_words_copies_the_words_asked_for() {
         let past = BUF as usize + 4 * n as usize;
         assert_eq!(&b.ram[past..past + 4], &[0xEE; 4], "nothing past {n} words");
     }
+}
+
+/// The reflex's window test (`__vme_free_rows`, the runtime's assembly) against the host
+/// bus's loop: random rectangles of the C-space map (two runs a row, the second possibly
+/// empty, any count of rows) over rows with a few nonzero words scattered in: the count of
+/// free rows it returns.
+#[test]
+fn free_rows_matches_the_host_bus() {
+    use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_SIDE};
+    let (mut b, img, mut g) = board();
+    let f = img
+        .symbol("__vme_free_rows")
+        .expect("__vme_free_rows in the reflex image");
+    let mut rng = sim_host::sim::Rng::new(31);
+    let stride = CSPACE_SIDE * CSPACE_COUNTERS;
+    let mut blocked = 0;
+    for case in 0..300u32 {
+        for i2 in 0..128 {
+            for i1 in 0..128 {
+                let v = if rng.next_u64().is_multiple_of(600) {
+                    1 << (rng.next_u64() % 32)
+                } else {
+                    0
+                };
+                ArrayBus::new(&mut g).write_u32(cspace_counter(i1, i2, 0), v);
+            }
+        }
+        let n0 = 1 + (rng.next_u64() % 128) as u32;
+        let a0 = (rng.next_u64() % (129 - n0 as u64)) as u32;
+        let n1 = if case.is_multiple_of(3) {
+            0
+        } else {
+            (rng.next_u64() % 129) as u32
+        };
+        let a1 = (rng.next_u64() % (129 - n1 as u64)) as u32 % 128;
+        let i2 = (rng.next_u64() % 128) as u32;
+        let nb = (rng.next_u64() % (129 - i2 as u64)) as u32;
+        let (o0, o1) = (cspace_counter(a0, i2, 0), cspace_counter(a1, i2, 0));
+        let want = ArrayBus::new(&mut g).free_rows(o0, n0, o1, n1, nb, stride);
+        blocked += (want < nb) as u32;
+        let base = vme_map::GLOBAL_RAM_BASE;
+        let (got, cycles) = b
+            .call(
+                &mut g,
+                f,
+                &[base + o0, n0, base + o1, n1, nb, stride],
+                200_000,
+            )
+            .unwrap();
+        assert_eq!(
+            got, want,
+            "case {case}: rows {i2}+{nb}, runs {a0}+{n0}, {a1}+{n1}"
+        );
+        assert!(cycles < 150_000, "{cycles} cycles");
+    }
+    assert!(
+        blocked > 50 && blocked < 290,
+        "{blocked} of 300 blocked: both outcomes tested"
+    );
 }
 
 /// The C-space board's column routine (`__vme_count_column`, the runtime's assembly) against

@@ -24,6 +24,24 @@ pub trait Map {
     fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32;
     /// The bitwise or of stripe words `i1 .. i1 + n` (`i1 + n <= 128`).
     fn stripes_or(&mut self, i1: u32, n: u32) -> u32;
+    /// How many of rows `i2 .. i2 + nb` (`i2 + nb <= 128`), from the first, are free over
+    /// pixels `a0 .. a0 + n0` and `a1 .. a1 + n1` (each run within the row); rows past the
+    /// first that is not are not read. The default reads row by row through
+    /// [`Map::row_or`].
+    fn free_rows(&mut self, i2: u32, nb: u32, a0: u32, n0: u32, a1: u32, n1: u32) -> u32 {
+        let mut k = 0;
+        while k < nb {
+            let mut acc = self.row_or(i2 + k, a0, n0);
+            if n1 > 0 {
+                acc |= self.row_or(i2 + k, a1, n1);
+            }
+            if acc != 0 {
+                return k;
+            }
+            k += 1;
+        }
+        nb
+    }
     /// Bit `k` set when pixel (`i1 + k`, `i2`) is marked, `k` < 32 (`i1` a multiple of 32):
     /// one word of a row of the planner's bitmap (`crates/planner`). The default reads
     /// pixel by pixel through [`Map::row_or`].
@@ -89,6 +107,17 @@ impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
     fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
         self.0
             .or_words(vme_map::layout::CSPACE_STRIPES + 4 * i1, n, 4)
+    }
+    fn free_rows(&mut self, i2: u32, nb: u32, a0: u32, n0: u32, a1: u32, n1: u32) -> u32 {
+        use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_SIDE};
+        self.0.free_rows(
+            cspace_counter(a0, i2, 0),
+            n0,
+            cspace_counter(a1, i2, 0),
+            n1,
+            nb,
+            CSPACE_SIDE * CSPACE_COUNTERS,
+        )
     }
     fn row_bits(&mut self, i2: u32, i1: u32) -> u32 {
         self.0
@@ -221,19 +250,13 @@ fn rows_free<M: Map + ?Sized>(
     n1: u32,
     tests: &mut u32,
 ) -> bool {
-    let mut i2 = b;
-    while i2 < b + nb {
-        let mut acc = m.row_or(i2, a0, n0);
-        if n1 > 0 {
-            acc |= m.row_or(i2, a1, n1);
-        }
-        *tests += n0 + n1;
-        if acc != 0 {
-            return false;
-        }
-        i2 += 1;
+    if nb == 0 {
+        return true;
     }
-    true
+    // The rows read: the free ones and the first that is not.
+    let free = m.free_rows(b, nb, a0, n0, a1, n1);
+    *tests += (n0 + n1) * (free + 1).min(nb);
+    free == nb
 }
 
 /// Whether column `i1` is free over `s2`.

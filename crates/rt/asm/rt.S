@@ -86,9 +86,14 @@ memcpy:                         /* void *memcpy(void *dst, const void *src, size
     move.l  %a1, %d0
     btst    #0, %d0
     bne.s   3f
-5:  cmpi.l  #32, %d1            /* both even: 32 bytes a pass, eight longs (the 68020 */
-    bcs.s   1f                  /* moves a long on any even address; unrolled, the */
-    move.l  (%a1)+, (%a0)+      /* planner board's 14 KiB of state moves in half the time) */
+    /* Both even: 32 bytes a pass (eight longs; the 68020 moves a long on any even
+     * address, and unrolled the planner board's 14 KiB of state moves in half the time),
+     * then the 0-7 longs left by a jump into the last seven moves (no loop: most copies
+     * are records and small structs), then a word and a byte. */
+    move.l  %d1, %d0
+    lsr.l   #5, %d0
+    beq.s   6f
+5:  move.l  (%a1)+, (%a0)+
     move.l  (%a1)+, (%a0)+
     move.l  (%a1)+, (%a0)+
     move.l  (%a1)+, (%a0)+
@@ -96,14 +101,28 @@ memcpy:                         /* void *memcpy(void *dst, const void *src, size
     move.l  (%a1)+, (%a0)+
     move.l  (%a1)+, (%a0)+
     move.l  (%a1)+, (%a0)+
-    subi.l  #32, %d1
-    bra.s   5b
-1:  subq.l  #4, %d1
-    bcs.s   2f
+    subq.l  #1, %d0
+    bne.s   5b
+6:  moveq   #28, %d0            /* bytes in the longs left, 0-28 */
+    and.l   %d1, %d0
+    lsr.l   #1, %d0             /* two bytes of code a long */
+    neg.l   %d0
+    jmp     7f(%pc, %d0.l)
     move.l  (%a1)+, (%a0)+
-    bra.s   1b
-2:  addq.l  #4, %d1
-3:  tst.l   %d1
+    move.l  (%a1)+, (%a0)+
+    move.l  (%a1)+, (%a0)+
+    move.l  (%a1)+, (%a0)+
+    move.l  (%a1)+, (%a0)+
+    move.l  (%a1)+, (%a0)+
+    move.l  (%a1)+, (%a0)+
+7:  btst    #1, %d1
+    beq.s   8f
+    move.w  (%a1)+, (%a0)+
+8:  btst    #0, %d1
+    beq.s   4f
+    move.b  (%a1)+, (%a0)+
+    bra.s   4f
+3:  tst.l   %d1                 /* an odd address: byte by byte */
     beq.s   4f
     move.b  (%a1)+, (%a0)+
     subq.l  #1, %d1
@@ -136,24 +155,26 @@ memmove:                        /* void *memmove(void *dst, const void *src, siz
 
     .globl memset
 memset:                         /* void *memset(void *dst, int c, size_t n) */
-    move.l  %d2, -(%sp)         /* arguments now 4 bytes further up */
-    movea.l 8(%sp), %a0
+    movea.l 4(%sp), %a0
     moveq   #0, %d0
-    move.b  15(%sp), %d0        /* c's low byte (big-endian int at 12(%sp)) */
-    move.l  16(%sp), %d1
+    move.b  11(%sp), %d0        /* c's low byte (big-endian int at 8(%sp)) */
+    tst.b   %d0
+    beq.s   1f                  /* zero (most calls) needs no spreading */
     mulu.l  #0x01010101, %d0    /* the byte in all four lanes */
-    move.l  %a0, %d2
-    btst    #0, %d2
+1:  move.l  12(%sp), %d1
+    move.l  %a0, -(%sp)         /* arguments now 4 bytes further up */
+    btst    #0, 3(%sp)
     beq.s   5f
     tst.l   %d1                 /* odd dst: one byte first, then longs */
     beq.s   4f
     move.b  %d0, (%a0)+
     subq.l  #1, %d1
-    /* 32 bytes a pass (eight longs; the 68020 stores one on any even address), then
-     * a long at a time, then the bytes left (unrolled: a third of the cycles on big
-     * clears). */
-5:  cmpi.l  #32, %d1
-    bcs.s   1f
+    /* 32 bytes a pass (eight longs; the 68020 stores one on any even address), then the
+     * 0-7 longs left by a jump into the last seven stores, then a word and a byte. */
+5:  move.l  %d1, -(%sp)
+    lsr.l   #5, %d1
+    beq.s   6f
+2:  move.l  %d0, (%a0)+
     move.l  %d0, (%a0)+
     move.l  %d0, (%a0)+
     move.l  %d0, (%a0)+
@@ -161,21 +182,28 @@ memset:                         /* void *memset(void *dst, int c, size_t n) */
     move.l  %d0, (%a0)+
     move.l  %d0, (%a0)+
     move.l  %d0, (%a0)+
+    subq.l  #1, %d1
+    bne.s   2b
+6:  moveq   #28, %d1            /* bytes in the longs left, 0-28 */
+    and.l   (%sp), %d1
+    lsr.l   #1, %d1             /* two bytes of code a long */
+    neg.l   %d1
+    jmp     7f(%pc, %d1.l)
     move.l  %d0, (%a0)+
-    subi.l  #32, %d1
-    bra.s   5b
-1:  subq.l  #4, %d1
-    bcs.s   2f
     move.l  %d0, (%a0)+
-    bra.s   1b
-2:  addq.l  #4, %d1
-3:  tst.l   %d1
+    move.l  %d0, (%a0)+
+    move.l  %d0, (%a0)+
+    move.l  %d0, (%a0)+
+    move.l  %d0, (%a0)+
+    move.l  %d0, (%a0)+
+7:  move.l  (%sp)+, %d1
+    btst    #1, %d1
+    beq.s   8f
+    move.w  %d0, (%a0)+
+8:  btst    #0, %d1
     beq.s   4f
     move.b  %d0, (%a0)+
-    subq.l  #1, %d1
-    bra.s   3b
-4:  move.l  (%sp)+, %d2
-    move.l  4(%sp), %d0
+4:  move.l  (%sp)+, %d0         /* dst */
     movea.l %d0, %a0
     rts
 
@@ -251,6 +279,53 @@ __vme_or_words:
     move.l  (%sp)+, %d2
 9:  rts
 
+/* ---- free rows of a rectangle: the reflex's window test (vme-map's GlobalBus::free_rows) ----
+ * u32 __vme_free_rows(const u32 *r0, u32 n0, const u32 *r1, u32 n1, u32 rows, u32 stride):
+ * row k is the n0 words from r0 + k * stride bytes and the n1 words from r1 + k * stride
+ * (n0, n1 <= 128); returns how many rows from the first are all zero (rows when every one
+ * is), reading no row past the first that is not. Each run is a JSR into a block of 128
+ * OR.L (An)+, 2 * n bytes before its RTS (entry points computed once): no loop counter
+ * per word. n1 = 0 reads nothing of the second run. */
+    .section .text.__vme_free_rows, "ax"
+    .globl __vme_free_rows
+__vme_free_rows:
+    movem.l %d2-%d5/%a2-%a4, -(%sp) /* 28 bytes: arguments from 32(%sp) */
+    movea.l 32(%sp), %a1
+    move.l  36(%sp), %d2
+    movea.l 40(%sp), %a2
+    move.l  44(%sp), %d3
+    move.l  48(%sp), %d4
+    move.l  52(%sp), %d5
+    lea     8f(%pc), %a3            /* run 0 enters 2 * n0 bytes before the RTS */
+    suba.l  %d2, %a3
+    suba.l  %d2, %a3
+    lea     8f(%pc), %a4
+    suba.l  %d3, %a4
+    suba.l  %d3, %a4
+    moveq   #0, %d0
+    tst.l   %d4
+    beq.s   9f
+5:  moveq   #0, %d1
+    movea.l %a1, %a0
+    jsr     (%a3)
+    tst.l   %d3
+    beq.s   6f
+    movea.l %a2, %a0
+    jsr     (%a4)
+6:  tst.l   %d1
+    bne.s   9f
+    addq.l  #1, %d0
+    adda.l  %d5, %a1
+    adda.l  %d5, %a2
+    cmp.l   %d4, %d0
+    bne.s   5b
+9:  movem.l (%sp)+, %d2-%d5/%a2-%a4
+    rts
+    .rept   128
+    or.l    (%a0)+, %d1
+    .endr
+8:  rts
+
 /* ---- nonzero words as bits: a row of the planner's bitmap (vme-map's GlobalBus::nonzero_bits)
  * u32 __vme_nonzero_bits(const u32 *addr): bit k set when the k-th of the 32 consecutive
  * words from addr is nonzero. TST.L (An)+ and BSET, four words a pass. */
@@ -308,13 +383,33 @@ __fx_rem_u32:
 __vme_read_words:
     movea.l 4(%sp), %a0
     movea.l 8(%sp), %a1
-    move.l  12(%sp), %d0
-    tst.l   %d0
+    move.l  12(%sp), %d1
+    move.l  %d1, %d0            /* eight words a pass, then the 0-7 left by a jump into */
+    lsr.l   #3, %d0             /* the last seven moves (records are 4-33 words) */
     beq.s   2f
 1:  move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
     subq.l  #1, %d0
     bne.s   1b
-2:  rts
+2:  moveq   #7, %d0
+    and.l   %d1, %d0
+    add.l   %d0, %d0            /* two bytes of code a word */
+    neg.l   %d0
+    jmp     3f(%pc, %d0.l)
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+    move.l  (%a0)+, (%a1)+
+3:  rts
 
 /* ---- C-space column: an image's column as up to five runs (vme-map's
  * GlobalBus::count_column, crates/cspace's raster) ----

@@ -35,6 +35,22 @@ pub trait GlobalBus {
         }
         acc
     }
+    /// How many rows of a rectangle, from its first, have every word zero: row `k` is the
+    /// `n0` aligned words from `off0 + k * stride` and the `n1` from `off1 + k * stride`,
+    /// and no row past the first with a nonzero word is read (`rows` when none has one).
+    /// The reflex's window test of a rectangle of C-space pixels in one call (on the 68020
+    /// `OR.L (An)+` loops in the runtime's assembly).
+    fn free_rows(&mut self, off0: u32, n0: u32, off1: u32, n1: u32, rows: u32, stride: u32) -> u32 {
+        let mut k = 0;
+        while k < rows {
+            let d = k * stride;
+            if self.or_words(off0 + d, n0, 4) | self.or_words(off1 + d, n1, 4) != 0 {
+                return k;
+            }
+            k += 1;
+        }
+        rows
+    }
     /// A column of the C-space map as up to five runs: `pieces` holds five (rows, mask)
     /// pairs taken in order down the column whose pixel in map row 0 is at `col_off`, from
     /// map row `row` (0..128), wrapping from the last row to the first. The first `skip`
@@ -130,6 +146,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         (**self).nonzero_bits(off)
+    }
+    fn free_rows(&mut self, off0: u32, n0: u32, off1: u32, n1: u32, rows: u32, stride: u32) -> u32 {
+        (**self).free_rows(off0, n0, off1, n1, rows, stride)
     }
     fn read_words(&mut self, off: u32, out: &mut [u32]) {
         (**self).read_words(off, out)
@@ -275,6 +294,33 @@ impl GlobalBus for MmioGlobal {
         }
         // SAFETY: `n` aligned words of mapped global RAM, only read.
         unsafe { __vme_or_words(Self::ptr::<u32>(off), n, stride) }
+    }
+    #[inline(always)]
+    fn free_rows(&mut self, off0: u32, n0: u32, off1: u32, n1: u32, rows: u32, stride: u32) -> u32 {
+        extern "C" {
+            // `OR.L (An)+` loops over each row's two runs in the runtime's assembly
+            // (crates/rt/asm/rt.S).
+            fn __vme_free_rows(
+                r0: *const u32,
+                n0: u32,
+                r1: *const u32,
+                n1: u32,
+                rows: u32,
+                stride: u32,
+            ) -> u32;
+        }
+        // SAFETY: `rows` rows of `n0` and `n1` aligned words of mapped global RAM from
+        // `off0` and `off1` (offsets from `layout`), only read.
+        unsafe {
+            __vme_free_rows(
+                Self::ptr::<u32>(off0),
+                n0,
+                Self::ptr::<u32>(off1),
+                n1,
+                rows,
+                stride,
+            )
+        }
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         extern "C" {
