@@ -109,11 +109,11 @@ impl Board {
     /// image's record and map reads are inlined volatile words.
     pub fn poll<G: GlobalBus>(&mut self, g: &mut G, io: &mut impl IoBus) -> u32 {
         self.shell.begin(g, io);
-        let servo = match vme_map::SERVO_STATE.read_raw(g, &mut self.servo_w) {
+        let servo_ok = match vme_map::SERVO_STATE.read_raw(g, &mut self.servo_w) {
             // The servo has not published yet: nothing to do.
             Ok(0) => return self.shell.end(g, BoardState::Running),
-            Ok(_) => Some(ServoView::from_words(&self.servo_w)),
-            Err(_) => None,
+            Ok(_) => true,
+            Err(_) => false,
         };
         // Straight into the board's copy: a torn read leaves it mixed, but then `objects_ok`
         // is false and nothing but the lag of entries that are not tracked looks at it.
@@ -131,7 +131,12 @@ impl Board {
         // The inputs are built in place in the board (copying them into a fresh value each
         // pass cost the 68020 thousands of cycles of memset and memcpy).
         let inp = &mut self.input;
-        inp.servo = servo;
+        // Written in place (a value built first and assigned cost a `memcpy` call a pass).
+        inp.servo = if servo_ok {
+            Some(ServoView::from_words(&self.servo_w))
+        } else {
+            None
+        };
         inp.goal = goal;
         inp.health.objects_frame = self.objects_w[0];
         inp.health.objects_torn = !ok;

@@ -364,7 +364,7 @@ impl Reflex {
     pub fn step<M: Map + ?Sized>(&mut self, inp: &Input, map: &mut M) -> Output {
         let mut out = Output::default();
         self.pass = self.pass.wrapping_add(1);
-        let Some(sv) = inp.servo else {
+        let Some(sv) = &inp.servo else {
             self.torn += 1;
             if self.torn > SERVO_STALE_PASSES {
                 let at = self.last.unwrap_or(self.hold_at);
@@ -519,7 +519,7 @@ impl Reflex {
     #[inline(never)]
     fn window<M: Map + ?Sized>(
         &mut self,
-        sv: ServoView,
+        sv: &ServoView,
         goal_urad: [i32; 2],
         pass_us: i32,
         moving: bool,
@@ -533,8 +533,8 @@ impl Reflex {
         let lat_us = 2 * masks::clamp(pass_us, 1000, 10_000) + 500;
         let mut a1 = Axis::default();
         let mut a2 = Axis::default();
-        prepare(&mut a1, 0, &sv, &prev, &goal_urad, lat_us);
-        prepare(&mut a2, 1, &sv, &prev, &goal_urad, lat_us);
+        prepare(&mut a1, 0, sv, &prev, &goal_urad, lat_us);
+        prepare(&mut a2, 1, sv, &prev, &goal_urad, lat_us);
         // Obstacles moving toward the arm: over the latency, the rectangle must hold them
         // off; for as long as the arm takes to stop, the subgoal keeps that far from any
         // wall (an obstacle that does come on is then met by the next pass's rectangle while
@@ -655,7 +655,7 @@ impl Reflex {
         if out.flags & flags::ESCAPING == 0 {
             self.escape_to = None;
         }
-        out.flags |= self.stall(&sv, &goal_urad, &sub);
+        out.flags |= self.stall(sv, &goal_urad, &sub);
         out.tests = tests;
         self.last = Some(sub);
         out.subgoal_urad = Some(sub);
