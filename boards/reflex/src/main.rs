@@ -26,10 +26,13 @@ fn main() -> ! {
 #[link_section = ".text.probe.reflex_run"]
 pub extern "C" fn reflex_probe_run(inputs: *const u32, n: u32, out: *mut i32) -> i32 {
     use reflex::script::{IN_WORDS, OUT_WORDS};
-    static mut REFLEX: reflex::Reflex = reflex::Reflex::new(reflex::Config::DEFAULT);
+    // In .bss and written here: a `Reflex::new()` initializer put the whole reflex in
+    // .data, copied at every reset for a probe only the tests call.
+    static mut REFLEX: core::mem::MaybeUninit<reflex::Reflex> = core::mem::MaybeUninit::uninit();
     // SAFETY: the probe is the only code that touches REFLEX, and runs once per call.
-    let r = unsafe { &mut *core::ptr::addr_of_mut!(REFLEX) };
-    *r = reflex::Reflex::new(reflex::Config::DEFAULT);
+    let r = unsafe {
+        (*core::ptr::addr_of_mut!(REFLEX)).write(reflex::Reflex::new(reflex::Config::DEFAULT))
+    };
     // SAFETY: the probe runs on the reflex image, where global RAM is mapped.
     let mut g = unsafe { MmioGlobal::new() };
     let mut i = 0;
@@ -72,6 +75,29 @@ pub extern "C" fn reflex_probe_escape(asks: *const i32, n: u32, out: *mut i32) -
             )
         };
         reflex::script::scripted_escape(s, w, &mut reflex::window::BusMap(&mut g), o);
+        i += 1;
+    }
+    0
+}
+
+#[no_mangle]
+#[link_section = ".text.probe.reflex_evade"]
+pub extern "C" fn reflex_probe_evade(asks: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{EVADE_IN_WORDS, EVADE_OUT_WORDS};
+    static mut SCRATCH: reflex::evade::Scratch = reflex::evade::Scratch::new();
+    static mut OBS: [reflex::ObstacleView; reflex::OBSTACLES] =
+        [reflex::ObstacleView::NONE; reflex::OBSTACLES];
+    let s = unsafe { &mut *core::ptr::addr_of_mut!(SCRATCH) };
+    let obs = unsafe { &mut *core::ptr::addr_of_mut!(OBS) };
+    let mut i = 0;
+    while i < n {
+        let (w, o) = unsafe {
+            (
+                &*(asks.add(EVADE_IN_WORDS * i as usize) as *const [i32; EVADE_IN_WORDS]),
+                &mut *(out.add(EVADE_OUT_WORDS * i as usize) as *mut [i32; EVADE_OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_evade(s, w, obs, o);
         i += 1;
     }
     0
