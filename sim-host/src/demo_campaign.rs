@@ -103,6 +103,7 @@ pub fn run_seed(sc: &Scenario, seed: u64, images: Option<&Path>) -> Result<SeedR
                 (reflex_flags::TRAPPED, "reflex trapped"),
                 (reflex_flags::HOLD, "reflex holding"),
                 (reflex_flags::ESCAPING, "reflex escaping"),
+                (reflex_flags::EVADING, "reflex evading"),
             ] {
                 if r.flags & bit != 0 {
                     why.push(name.into());

@@ -374,6 +374,99 @@ fn the_reflex_images_escapes_match_the_host() {
     );
 }
 
+/// The evasion (`reflex::evade`) on the image against the host, answer for answer: arms
+/// anywhere with one to six disks of 10-50 mm within 150 mm of a point of link 2, resting or
+/// moving at up to 0.4 m/s,
+/// some slots empty; how long each of the nine ways lasts and the one chosen. Also checks
+/// that the answers are not all alike (some ways last the horizon, some fail at once, the
+/// chosen way varies). Prints the image's cycles per answer.
+#[test]
+fn the_reflex_images_evasions_match_the_host() {
+    use reflex::script::{scripted_evade, EVADE_IN_WORDS, EVADE_OUT_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut rng = Rng::new(21);
+    let n = 300;
+    let mut asks: Vec<i32> = Vec::new();
+    for _ in 0..n {
+        let mut r = |m: u64| (rng.next_u64() % m) as i32;
+        let th = [r(12_566_371) - 6_283_185, r(12_566_371) - 6_283_185];
+        let (t1, t2) = (th[0] as f64 * 1e-6, th[1] as f64 * 1e-6);
+        // Near a point of the arm: the elbow or along link 2 (fore or aft).
+        let s = (r(380) - 130) as f64 * 1e-3;
+        let (px, py) = (
+            0.25 * t1.cos() + s * t2.cos(),
+            0.25 * t1.sin() + s * t2.sin(),
+        );
+        asks.extend_from_slice(&[th[0], th[1], r(3) - 1, r(3) - 1]);
+        let disks = 1 + r(6);
+        for i in 0..reflex::OBSTACLES as i32 {
+            let off = |v: i32| (v - 150) as f64 * 1e-3;
+            let (x, y) = (px + off(r(301)), py + off(r(301)));
+            asks.extend_from_slice(&[
+                (i < disks) as i32,
+                (x * 1e6) as i32,
+                (y * 1e6) as i32,
+                10_000 + r(40_001),
+                r(800_001) - 400_000,
+                r(800_001) - 400_000,
+            ]);
+        }
+    }
+    let mut sc = reflex::evade::Scratch::new();
+    let mut obs = [reflex::ObstacleView::NONE; reflex::OBSTACLES];
+    let host: Vec<[i32; EVADE_OUT_WORDS]> = asks
+        .chunks(EVADE_IN_WORDS)
+        .map(|w| {
+            let mut o = [0; EVADE_OUT_WORDS];
+            scripted_evade(&mut sc, w.try_into().unwrap(), &mut obs, &mut o);
+            o
+        })
+        .collect();
+    let horizon = reflex::evade::STEPS as i32 - 1;
+    let at_once = host.iter().filter(|o| o[3..].contains(&0)).count();
+    let through = host.iter().filter(|o| o[3..].contains(&horizon)).count();
+    let moved = host.iter().filter(|o| o[0] != 0 || o[1] != 0).count();
+    assert!(
+        at_once > 30 && through > 30 && moved > 30,
+        "{at_once} with a way failing at once, {through} with one lasting, {moved} moving"
+    );
+    let words: Vec<u32> = asks.iter().map(|&w| w as u32).collect();
+    let (mut b, f) = probe_board(&img, &mut global, "reflex_probe_evade", &words);
+    let mut cycles = Vec::new();
+    for i in 0..n as u32 {
+        let (ret, c) = b
+            .call(
+                &mut global,
+                f,
+                &[
+                    BUF + 4 * EVADE_IN_WORDS as u32 * i,
+                    1,
+                    OUT + 4 * EVADE_OUT_WORDS as u32 * i,
+                ],
+                100_000_000,
+            )
+            .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
+        assert_eq!(ret, 0);
+        cycles.push(c);
+    }
+    for (i, h) in host.iter().enumerate() {
+        let got = ram_words(&b, OUT + 4 * (EVADE_OUT_WORDS * i) as u32, EVADE_OUT_WORDS);
+        assert_eq!(
+            got,
+            h.to_vec(),
+            "evasion {i}: {:?}",
+            &asks[i * EVADE_IN_WORDS..][..EVADE_IN_WORDS]
+        );
+    }
+    let mean = cycles.iter().sum::<u64>() / n as u64;
+    let worst = cycles.iter().max().unwrap();
+    eprintln!(
+        "{n} evasions ({at_once} with a way failing at once, {through} with one lasting, \
+         {moved} moving): {mean} cycles an answer on average, {worst} at most"
+    );
+}
+
 /// The safety campaign (issue 8): zero collisions in 2,000 random static scenes with the
 /// sensing, C-space, servo and reflex boards, the collision oracle at every plant step
 /// (`sim-host campaign reflex` runs any seed and count).

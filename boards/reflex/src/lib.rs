@@ -89,6 +89,7 @@ impl Board {
                     fresh: 0,
                 },
                 obstacles_moving: false,
+                obstacles: [reflex::ObstacleView::NONE; reflex::OBSTACLES],
             },
             entry: 0,
         }
@@ -145,6 +146,10 @@ impl Board {
         fill_health(&mut inp.health, g, &self.objects_w, ok, self.entry);
         inp.health.fresh = 1 << self.entry;
         inp.obstacles_moving = ok && moving(&self.objects_w);
+        // Only the evasion reads them, and only among moving obstacles.
+        if inp.obstacles_moving {
+            obstacles(&mut inp.obstacles, g, &self.objects_w, ok);
+        }
         let out = self.reflex.step(&self.input, &mut BusMap(&mut *g));
         if let Some(sub) = out.subgoal_urad {
             self.cycle = self.cycle.wrapping_add(1);
@@ -232,6 +237,34 @@ fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
 /// The C-space heartbeats and work-list entry `i` into `h`, the entry against its obstacle's
 /// sensed position in `objects`. Written through a reference in a non-inlined function: a
 /// local array filled in a loop lost its index on the 68k (docs/toolchain.md, class 6).
+/// The obstacles for the evasion (`reflex::evade`): the sensing board's positions, the
+/// host's radii (0: the default cylinder), the C-space boards' sweep estimates (the
+/// entry's last word: mm over the look-ahead, x and y in 16 bits each) as velocities.
+#[inline(never)]
+fn obstacles<G: GlobalBus>(
+    v: &mut [reflex::ObstacleView; reflex::OBSTACLES],
+    g: &mut G,
+    objects: &[u32; OBJECT_WORDS],
+    ok: bool,
+) {
+    let mut i = 0;
+    while i < reflex::OBSTACLES {
+        let b = OBSTACLE_BEACONS[i] as usize;
+        let valid = ok && beacon_word(objects, b, 3) & beacon_flags::VALID != 0;
+        let (sx, sy) = worklist::drawn_sweep_mm(g, i as u32);
+        // mm over the look-ahead to um/s.
+        const K: i32 = 1000 * 1000 / worklist::LOOKAHEAD_MS;
+        let o = &mut v[i];
+        o.valid = valid;
+        o.x_um = beacon_word(objects, b, 0) as i32;
+        o.y_um = beacon_word(objects, b, 1) as i32;
+        o.r_um = worklist::radius(g, i as u32);
+        o.vx_um_s = sx * K;
+        o.vy_um_s = sy * K;
+        i += 1;
+    }
+}
+
 #[inline(never)]
 fn fill_health<G: GlobalBus>(
     h: &mut HealthInput,

@@ -138,7 +138,23 @@ fn smooth(was: (i32, i32), now: (i32, i32)) -> (i32, i32) {
 }
 
 fn sweep_of(e: &WorkEntry) -> (i32, i32) {
-    ((e.reserved as i32) >> 16, (e.reserved as i32) << 16 >> 16)
+    unpack_sweep(e.reserved)
+}
+
+/// The sweep packed in an entry's last word: mm over [`LOOKAHEAD_MS`], x in the high half,
+/// y in the low, each signed.
+fn unpack_sweep(w: u32) -> (i32, i32) {
+    ((w as i32) >> 16, (w as i32) << 16 >> 16)
+}
+
+/// Word of [`WorkEntry`] that holds the sweep drawn.
+const SWEEP_WORD: u32 = vme_map::record::word_index(WorkEntry::FIELDS, "reserved");
+
+/// The sweep drawn for entry `i`'s obstacle, mm over [`LOOKAHEAD_MS`] (x, y): its velocity
+/// as the C-space boards estimate it, for the reflex's evasion (`reflex::evade`). One
+/// word, written whole by the board that drew the entry.
+pub fn drawn_sweep_mm(g: &mut (impl GlobalBus + ?Sized), i: u32) -> (i32, i32) {
+    unpack_sweep(g.read_u32(work_entry(i) + 4 * SWEEP_WORD))
 }
 
 /// Draws (`op`) the images of an entry-like position and sweep.

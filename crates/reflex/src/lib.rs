@@ -48,6 +48,7 @@
 /// quiet (the servo's log, keyed here by the servo's published time, us).
 pub use servo::arrest_log;
 pub mod escape;
+pub mod evade;
 pub mod goal;
 pub mod health;
 pub mod masks;
@@ -207,6 +208,40 @@ pub struct Input {
     pub health: HealthInput,
     /// Some obstacle is moving (the sensing board's flag on a valid obstacle beacon).
     pub obstacles_moving: bool,
+    /// The obstacles as sensed, for the evasion ([`evade`]).
+    pub obstacles: [ObstacleView; OBSTACLES],
+}
+
+/// Obstacle slots the reflex is given (the C-space work list's entries).
+pub const OBSTACLES: usize = 6;
+
+/// One obstacle as the sensing board publishes it and the C-space boards draw it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ObstacleView {
+    /// Whether the slot holds a sensed obstacle.
+    pub valid: bool,
+    /// Centre x, micrometres (the sensing board's latest position).
+    pub x_um: i32,
+    /// Centre y, micrometres.
+    pub y_um: i32,
+    /// Radius, micrometres.
+    pub r_um: i32,
+    /// Velocity x, micrometres per second (the C-space board's sweep estimate).
+    pub vx_um_s: i32,
+    /// Velocity y, micrometres per second.
+    pub vy_um_s: i32,
+}
+
+impl ObstacleView {
+    /// An empty slot.
+    pub const NONE: ObstacleView = ObstacleView {
+        valid: false,
+        x_um: 0,
+        y_um: 0,
+        r_um: 0,
+        vx_um_s: 0,
+        vy_um_s: 0,
+    };
 }
 
 /// Why the reflex holds the arm.
@@ -307,6 +342,10 @@ pub struct Reflex {
     pass: u32,
     /// The escape target of the previous pass (unwrapped pixels).
     escape_to: Option<[i32; 2]>,
+    /// The evasion's last way (each link -1, 0, +1), kept one sample longer.
+    evade_dir: [i32; 2],
+    /// The evasion's prediction.
+    evasion: evade::Scratch,
     /// The escape's bitmaps.
     scratch: escape::Scratch,
     /// The wand position the goal was last computed from.
@@ -348,6 +387,8 @@ impl Reflex {
             braked_pass: 0,
             pass: 0,
             escape_to: None,
+            evade_dir: [0, 0],
+            evasion: evade::Scratch::new(),
             scratch: escape::Scratch::new(),
             wand_um: [0; 2],
             log: arrest_log::ArrestLog::new(),
@@ -484,7 +525,7 @@ impl Reflex {
         // Logged only on passes that got this far (a pass that holds needs no log).
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
-        self.window(sv, goal, pass_us, inp.obstacles_moving, map, &mut out);
+        self.window(sv, goal, pass_us, inp, map, &mut out);
         out
     }
 
@@ -522,10 +563,11 @@ impl Reflex {
         sv: &ServoView,
         goal_urad: [i32; 2],
         pass_us: i32,
-        moving: bool,
+        inp: &Input,
         map: &mut M,
         out: &mut Output,
     ) {
+        let (moving, obstacles) = (inp.obstacles_moving, &inp.obstacles);
         let prev = self.last.unwrap_or(sv.arrest_urad);
         // Latency: the state is up to a pass old when read, and the subgoal waits up to a
         // pass for the servo; twice the pass time plus half a millisecond, 1 ms passes at
@@ -594,9 +636,16 @@ impl Reflex {
                 }
                 self.braked_pass = self.pass;
             }
-            let frozen = at_rest
-                && (self.now_us.wrapping_sub(self.stall_since_us) > FROZEN_US
-                    || self.now_us.wrapping_sub(self.braked_since_us) > FROZEN_US);
+            // Masks from signs (the compiled compares fed their branch through a register
+            // copy once the evasion was added: docs/toolchain.md class 1); ages capped at
+            // 2^30 us, far beyond the limit, so the signed compare is the unsigned one.
+            let older = |since: u32| {
+                masks::lt(
+                    FROZEN_US as i32,
+                    self.now_us.wrapping_sub(since).min(1 << 30) as i32,
+                )
+            };
+            let frozen = at_rest && (older(self.stall_since_us) | older(self.braked_since_us)) != 0;
             let near = !window::rect_free(map, a1.own, a2.own, &mut tests)
                 || (frozen && !window::rect_free(map, a1.rest, a2.rest, &mut tests));
             if !near && window::rect_free(map, a1.core, a2.core, &mut tests) {
@@ -635,19 +684,30 @@ impl Reflex {
                         // chosen once ran into obstacles that had moved meanwhile).
                         out.flags |= flags::ESCAPING;
                         let step = |th: i32, q: i32| {
-                            let d = masks::clamp(
-                                q * PIX_U + PIX_U / 2 - th,
-                                -ESCAPE_STEP_U,
-                                ESCAPE_STEP_U,
-                            );
-                            u_to_urad(th + d)
+                            masks::clamp(q * PIX_U + PIX_U / 2 - th, -ESCAPE_STEP_U, ESCAPE_STEP_U)
                         };
-                        sub[0] = step(a1.theta, q[0]);
-                        sub[1] = step(a2.theta, q[1]);
+                        let (d1, d2) = (step(a1.theta, q[0]), step(a2.theta, q[1]));
+                        sub[0] = u_to_urad(a1.theta + d1);
+                        sub[1] = u_to_urad(a2.theta + d2);
+                        self.evade_dir = [0, 0];
                     }
                     None => {
                         out.flags |= flags::TRAPPED;
                         sub = sv.arrest_urad;
+                        if moving {
+                            // Trapped by the map among moving obstacles: the way that keeps
+                            // clear of their predicted disks longest (staying put if that
+                            // lasts as long as any).
+                            evade::prepare(&mut self.evasion, &sv.theta_urad, obstacles);
+                            let mut b = [0; 3];
+                            evade::best(&self.evasion, &self.evade_dir, &mut b);
+                            self.evade_dir = [b[0], b[1]];
+                            if b[0] | b[1] != 0 {
+                                out.flags |= flags::EVADING;
+                                sub[0] = u_to_urad(a1.theta + b[0] * ESCAPE_STEP_U);
+                                sub[1] = u_to_urad(a2.theta + b[1] * ESCAPE_STEP_U);
+                            }
+                        }
                     }
                 }
             }

@@ -61,6 +61,7 @@ pub fn scripted_pass<M: Map + ?Sized>(
             goal,
             health,
             obstacles_moving: w[17] & 2 != 0,
+            obstacles: [crate::ObstacleView::NONE; crate::OBSTACLES],
         },
         map,
     );
@@ -152,5 +153,52 @@ pub fn scripted_escape<M: Map + ?Sized>(
             p.clear_px,
             p.crossed as i32,
         ];
+    }
+}
+
+/// Words of one evasion question ([`scripted_evade`]): the arm's angles (2, urad), the
+/// previous way (2), then [`crate::OBSTACLES`] obstacles of six words each (valid 0/1, x,
+/// y, radius in um, velocity x, y in um/s).
+pub const EVADE_IN_WORDS: usize = 4 + 6 * crate::OBSTACLES;
+/// Words of one evasion answer: the best way (2), how long it lasts, then how long each of
+/// the nine ways lasts (link 1 -1, 0, +1 outer, link 2 inner).
+pub const EVADE_OUT_WORDS: usize = 3 + 9;
+
+/// Answers one evasion question ([`crate::evade`]) from the words `w` with the arrays `s`;
+/// writes `out`. For the image's probe `reflex_probe_evade` and the system tests.
+#[inline(never)]
+pub fn scripted_evade(
+    s: &mut crate::evade::Scratch,
+    w: &[i32; EVADE_IN_WORDS],
+    obs: &mut [crate::ObstacleView; crate::OBSTACLES],
+    out: &mut [i32; EVADE_OUT_WORDS],
+) {
+    let mut i = 0;
+    while i < crate::OBSTACLES {
+        let o = &mut obs[i];
+        let b = 4 + 6 * i;
+        o.valid = w[b] != 0;
+        o.x_um = w[b + 1];
+        o.y_um = w[b + 2];
+        o.r_um = w[b + 3];
+        o.vx_um_s = w[b + 4];
+        o.vy_um_s = w[b + 5];
+        i += 1;
+    }
+    let theta = [w[0], w[1]];
+    crate::evade::prepare(s, &theta, obs);
+    let mut b = [0; 3];
+    crate::evade::best(s, &[w[2], w[3]], &mut b);
+    out[0] = b[0];
+    out[1] = b[1];
+    out[2] = b[2];
+    let mut a = 0;
+    while a < 3 {
+        let mut c = 0;
+        while c < 3 {
+            out[3 + 3 * a + c] = crate::evade::lasts(s, &[a as i32 - 1, c as i32 - 1]) as i32;
+            c += 1;
+        }
+        a += 1;
     }
 }

@@ -97,6 +97,7 @@ fn at_rest(m: &TestMap, theta: [f64; 2], goal: [f64; 2], n: u32) -> Output {
             goal: planner(goal, k),
             health: healthy(k),
             obstacles_moving: false,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         out = r.step(&inp, &mut m.map());
     }
@@ -182,6 +183,7 @@ fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
             goal: planner([2.0, 1.0], k),
             health: healthy(k),
             obstacles_moving: true,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         let s = sub(&o);
@@ -215,6 +217,7 @@ fn an_arm_the_map_covers_among_resting_obstacles_holds_instead_of_crossing() {
             goal: planner([2.0, 1.0], k),
             health: healthy(k),
             obstacles_moving: false,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         if o.flags & flags::WAITING != 0 {
@@ -266,6 +269,7 @@ fn a_stale_map_holds_the_arm_at_the_arrest_point_it_had_when_the_map_went_quiet(
                 goal: planner([3.0, 0.0], k),
                 health: h,
                 obstacles_moving: false,
+                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -327,6 +331,7 @@ fn a_torn_map_update_and_a_lagging_image_hold_the_arm() {
                     goal: planner([1.0, 1.0], k),
                     health: h,
                     obstacles_moving: false,
+                    obstacles: [ObstacleView::NONE; OBSTACLES],
                 },
                 &mut m.map(),
             );
@@ -355,6 +360,7 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
                 goal: planner([1.0, 1.0], k),
                 health: healthy(k),
                 obstacles_moving: false,
+                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -371,6 +377,7 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
                 goal: planner([1.0, 1.0], k.min(20)),
                 health: healthy(k),
                 obstacles_moving: false,
+                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -395,6 +402,7 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
                 goal,
                 health: healthy(k),
                 obstacles_moving: false,
+                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -416,6 +424,7 @@ fn nothing_is_published_before_the_servo_is_and_the_arm_holds_until_the_map_is_g
             goal: GoalInput::None,
             health: healthy(1),
             obstacles_moving: false,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
         },
         &mut m.map(),
     );
@@ -430,6 +439,7 @@ fn nothing_is_published_before_the_servo_is_and_the_arm_holds_until_the_map_is_g
                 goal: planner([1.0, 1.0], k),
                 health: h,
                 obstacles_moving: false,
+                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -538,7 +548,7 @@ proptest! {
         // millisecond later; 10 us plant steps; 3 s.
         for k in 1..=3000u32 {
             let o = r.step(
-                &Input { servo: Some(a.view(k)), goal: planner([s[0] + goal.0, s[1] + goal.1], k), health: healthy(k), obstacles_moving: false },
+                &Input { servo: Some(a.view(k)), goal: planner([s[0] + goal.0, s[1] + goal.1], k), health: healthy(k), obstacles_moving: false, obstacles: [ObstacleView::NONE; OBSTACLES] },
                 &mut m.map(),
             );
             for j in 0..100 {
@@ -598,6 +608,7 @@ fn an_arm_resting_in_the_margin_backs_off_though_its_goal_keeps_changing() {
             goal: planner(goal, k),
             health: healthy(k),
             obstacles_moving: false,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         if o.flags & flags::WAITING != 0 {

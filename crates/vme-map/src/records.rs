@@ -331,6 +331,9 @@ pub mod reflex_flags {
     pub const ARRIVED: u32 = 1 << 10;
     /// Holding after power-up until the map and the positions are first good (no fault).
     pub const WAITING: u32 = 1 << 11;
+    /// Among moving obstacles, the way chosen against their predicted positions
+    /// (`reflex::evade`) rather than the map's escape or hold.
+    pub const EVADING: u32 = 1 << 12;
 }
 
 /// Codes of the low byte of [`PlannerGoal::mode`] (thesis ch. VI; `crates/planner` sets
