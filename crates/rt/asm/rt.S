@@ -93,14 +93,10 @@ memcpy:                         /* void *memcpy(void *dst, const void *src, size
     move.l  %d1, %d0
     lsr.l   #5, %d0
     beq.s   6f
-5:  move.l  (%a1)+, (%a0)+
+5:
+    .rept   8
     move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
+    .endr
     subq.l  #1, %d0
     bne.s   5b
 6:  moveq   #28, %d0            /* bytes in the longs left, 0-28 */
@@ -108,13 +104,9 @@ memcpy:                         /* void *memcpy(void *dst, const void *src, size
     lsr.l   #1, %d0             /* two bytes of code a long */
     neg.l   %d0
     jmp     7f(%pc, %d0.l)
+    .rept   7
     move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
-    move.l  (%a1)+, (%a0)+
+    .endr
 7:  btst    #1, %d1
     beq.s   8f
     move.w  (%a1)+, (%a0)+
@@ -174,14 +166,10 @@ memset:                         /* void *memset(void *dst, int c, size_t n) */
 5:  move.l  %d1, -(%sp)
     lsr.l   #5, %d1
     beq.s   6f
-2:  move.l  %d0, (%a0)+
+2:
+    .rept   8
     move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
+    .endr
     subq.l  #1, %d1
     bne.s   2b
 6:  moveq   #28, %d1            /* bytes in the longs left, 0-28 */
@@ -189,13 +177,9 @@ memset:                         /* void *memset(void *dst, int c, size_t n) */
     lsr.l   #1, %d1             /* two bytes of code a long */
     neg.l   %d1
     jmp     7f(%pc, %d1.l)
+    .rept   7
     move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
-    move.l  %d0, (%a0)+
+    .endr
 7:  move.l  (%sp)+, %d1
     btst    #1, %d1
     beq.s   8f
@@ -387,14 +371,10 @@ __vme_read_words:
     move.l  %d1, %d0            /* eight words a pass, then the 0-7 left by a jump into */
     lsr.l   #3, %d0             /* the last seven moves (records are 4-33 words) */
     beq.s   2f
-1:  move.l  (%a0)+, (%a1)+
+1:
+    .rept   8
     move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
+    .endr
     subq.l  #1, %d0
     bne.s   1b
 2:  moveq   #7, %d0
@@ -402,13 +382,9 @@ __vme_read_words:
     add.l   %d0, %d0            /* two bytes of code a word */
     neg.l   %d0
     jmp     3f(%pc, %d0.l)
+    .rept   7
     move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
-    move.l  (%a0)+, (%a1)+
+    .endr
 3:  rts
 
 /* ---- C-space column: an image's column as up to five runs (vme-map's
