@@ -237,6 +237,8 @@ fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
 /// The C-space heartbeats and work-list entry `i` into `h`, the entry against its obstacle's
 /// sensed position in `objects`. Written through a reference in a non-inlined function: a
 /// local array filled in a loop lost its index on the 68k (docs/toolchain.md, class 6).
+const _: () = assert!(reflex::OBSTACLES == OBSTACLE_BEACONS.len());
+
 /// The obstacles for the evasion (`reflex::evade`): the sensing board's positions, the
 /// host's radii (0: the default cylinder), the C-space boards' sweep estimates (the
 /// entry's last word: mm over the look-ahead, x and y in 16 bits each) as velocities.

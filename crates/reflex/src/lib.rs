@@ -212,7 +212,9 @@ pub struct Input {
     pub obstacles: [ObstacleView; OBSTACLES],
 }
 
-/// Obstacle slots the reflex is given (the C-space work list's entries).
+/// Obstacle slots the reflex is given: one per obstacle beacon of the sensing board, slot
+/// `i` for C-space work-list entry `i` (the board checks the count against
+/// `cspace::worklist::OBSTACLE_BEACONS`).
 pub const OBSTACLES: usize = 6;
 
 /// One obstacle as the sensing board publishes it and the C-space boards draw it.
