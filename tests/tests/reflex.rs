@@ -34,6 +34,50 @@ fn probe_board(img: &Image, global: &mut [u8], name: &str, words: &[u32]) -> (Em
     (b, f)
 }
 
+/// Probe `name` on the reflex image, called once per question of `asks` (`in_words` words
+/// each, answered at [`OUT`]): asserts each answer is the host's (`host[i]`, `what` naming
+/// a question in the message) and returns each call's cycles.
+fn probe_each<H: AsRef<[i32]>>(
+    img: &Image,
+    global: &mut [u8],
+    name: &str,
+    asks: &[i32],
+    in_words: usize,
+    host: &[H],
+    what: &str,
+) -> Vec<u64> {
+    let out_words = host[0].as_ref().len();
+    let words: Vec<u32> = asks.iter().map(|&w| w as u32).collect();
+    let (mut b, f) = probe_board(img, global, name, &words);
+    let mut cycles = Vec::new();
+    for i in 0..host.len() as u32 {
+        let (ret, c) = b
+            .call(
+                global,
+                f,
+                &[
+                    BUF + 4 * in_words as u32 * i,
+                    1,
+                    OUT + 4 * out_words as u32 * i,
+                ],
+                100_000_000,
+            )
+            .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
+        assert_eq!(ret, 0);
+        cycles.push(c);
+    }
+    for (i, h) in host.iter().enumerate() {
+        let got = ram_words(&b, OUT + 4 * (out_words * i) as u32, out_words);
+        assert_eq!(
+            got,
+            h.as_ref().to_vec(),
+            "{what} {i}: {:?}",
+            &asks[i * in_words..][..in_words]
+        );
+    }
+    cycles
+}
+
 /// `n` words of the board's RAM from `addr`.
 fn ram_words(b: &EmuBoard, addr: u32, n: usize) -> Vec<i32> {
     (0..n as u32)
@@ -326,39 +370,16 @@ fn the_reflex_images_escapes_match_the_host() {
     let crossed = host.iter().filter(|o| o[0] == 1 && o[6] > 0).count();
     let none = host.iter().filter(|o| o[0] == 0).count();
     assert!(crossed > 20, "only {crossed} plans crossed marks");
-    let words: Vec<u32> = asks.iter().map(|&w| w as u32).collect();
-    let (mut b, f) = probe_board(&img, &mut global, "reflex_probe_escape", &words);
     // A call a plan, for each plan's cycles (the scratch bitmaps carry nothing over).
-    let mut cycles = Vec::new();
-    for i in 0..n as u32 {
-        let (ret, c) = b
-            .call(
-                &mut global,
-                f,
-                &[
-                    BUF + 4 * ESCAPE_IN_WORDS as u32 * i,
-                    1,
-                    OUT + 4 * ESCAPE_OUT_WORDS as u32 * i,
-                ],
-                100_000_000,
-            )
-            .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
-        assert_eq!(ret, 0);
-        cycles.push(c);
-    }
-    for (i, h) in host.iter().enumerate() {
-        let got = ram_words(
-            &b,
-            OUT + 4 * (ESCAPE_OUT_WORDS * i) as u32,
-            ESCAPE_OUT_WORDS,
-        );
-        assert_eq!(
-            got,
-            h.to_vec(),
-            "plan {i}: {:?}",
-            &asks[i * ESCAPE_IN_WORDS..][..ESCAPE_IN_WORDS]
-        );
-    }
+    let cycles = probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_escape",
+        &asks,
+        ESCAPE_IN_WORDS,
+        &host,
+        "plan",
+    );
     let mean = cycles.iter().sum::<u64>() / n as u64;
     let (worst, wi) = cycles
         .iter()
@@ -431,34 +452,15 @@ fn the_reflex_images_evasions_match_the_host() {
         at_once > 30 && through > 30 && moved > 30,
         "{at_once} with a way failing at once, {through} with one lasting, {moved} moving"
     );
-    let words: Vec<u32> = asks.iter().map(|&w| w as u32).collect();
-    let (mut b, f) = probe_board(&img, &mut global, "reflex_probe_evade", &words);
-    let mut cycles = Vec::new();
-    for i in 0..n as u32 {
-        let (ret, c) = b
-            .call(
-                &mut global,
-                f,
-                &[
-                    BUF + 4 * EVADE_IN_WORDS as u32 * i,
-                    1,
-                    OUT + 4 * EVADE_OUT_WORDS as u32 * i,
-                ],
-                100_000_000,
-            )
-            .unwrap_or_else(|| panic!("the probe returns: {:?} at pc {:#x}", b.state, b.cpu.pc));
-        assert_eq!(ret, 0);
-        cycles.push(c);
-    }
-    for (i, h) in host.iter().enumerate() {
-        let got = ram_words(&b, OUT + 4 * (EVADE_OUT_WORDS * i) as u32, EVADE_OUT_WORDS);
-        assert_eq!(
-            got,
-            h.to_vec(),
-            "evasion {i}: {:?}",
-            &asks[i * EVADE_IN_WORDS..][..EVADE_IN_WORDS]
-        );
-    }
+    let cycles = probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_evade",
+        &asks,
+        EVADE_IN_WORDS,
+        &host,
+        "evasion",
+    );
     let mean = cycles.iter().sum::<u64>() / n as u64;
     let worst = cycles.iter().max().unwrap();
     eprintln!(
