@@ -67,6 +67,12 @@ fn beacon_word(t: &[u32; OBJECT_WORDS], b: usize, w: usize) -> u32 {
     t[1 + 4 * b + w]
 }
 
+/// Whether beacon `b` of an object table read whole (`ok`) is flagged valid.
+#[inline(always)]
+fn beacon_valid(t: &[u32; OBJECT_WORDS], b: usize, ok: bool) -> bool {
+    ok && beacon_word(t, b, 3) & beacon_flags::VALID != 0
+}
+
 impl Board {
     /// A fresh board.
     pub const fn new() -> Self {
@@ -211,7 +217,7 @@ fn publish<G: GlobalBus>(
 #[inline(never)]
 fn wand(t: &[u32; OBJECT_WORDS], ok: bool) -> GoalInput {
     let w = beacon_index::WAND;
-    if ok && beacon_word(t, w, 3) & beacon_flags::VALID != 0 {
+    if beacon_valid(t, w, ok) {
         GoalInput::Wand {
             x_um: beacon_word(t, w, 0) as i32,
             y_um: beacon_word(t, w, 1) as i32,
@@ -234,9 +240,6 @@ fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
     any != 0
 }
 
-/// The C-space heartbeats and work-list entry `i` into `h`, the entry against its obstacle's
-/// sensed position in `objects`. Written through a reference in a non-inlined function: a
-/// local array filled in a loop lost its index on the 68k (docs/toolchain.md, class 6).
 const _: () = assert!(reflex::OBSTACLES == OBSTACLE_BEACONS.len());
 
 /// The obstacles for the evasion (`reflex::evade`): the sensing board's positions, the
@@ -252,7 +255,7 @@ fn obstacles<G: GlobalBus>(
     let mut i = 0;
     while i < reflex::OBSTACLES {
         let b = OBSTACLE_BEACONS[i] as usize;
-        let valid = ok && beacon_word(objects, b, 3) & beacon_flags::VALID != 0;
+        let valid = beacon_valid(objects, b, ok);
         let (sx, sy) = worklist::drawn_sweep_mm(g, i as u32);
         // mm over the look-ahead to um/s.
         const K: i32 = 1000 * 1000 / worklist::LOOKAHEAD_MS;
@@ -267,6 +270,9 @@ fn obstacles<G: GlobalBus>(
     }
 }
 
+/// The C-space heartbeats and work-list entry `i` into `h`, the entry against its obstacle's
+/// sensed position in `objects`. Written through a reference in a non-inlined function: a
+/// local array filled in a loop lost its index on the 68k (docs/toolchain.md, class 6).
 #[inline(never)]
 fn fill_health<G: GlobalBus>(
     h: &mut HealthInput,
@@ -296,7 +302,7 @@ fn entry_view<G: GlobalBus>(
     let (ex, ey) = (g.read_u32(base + 8) as i32, g.read_u32(base + 12) as i32);
     let state = g.read_u32(base + 20);
     let b = OBSTACLE_BEACONS[i as usize] as usize;
-    let valid = ok && beacon_word(objects, b, 3) & beacon_flags::VALID != 0;
+    let valid = beacon_valid(objects, b, ok);
     // The host wrote a radius for this entry: the obstacle exists, seen or not. One that
     // was never drawn leaves the map without it (an obstacle no sensor sees is not free
     // space).
