@@ -274,6 +274,7 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
     let mut host = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
     let n = OBSTACLE_BEACONS.len() as u32;
     let entries = work_entry(0)..work_entry(n);
+    let mut scratch = Box::new(cspace::worklist::Scratch::new());
     for (k, t) in tables.iter().enumerate() {
         publish(&mut sys, t);
         // One whole round of the cursor after the table is in place, plus the job in flight.
@@ -303,7 +304,7 @@ pub fn image_vs_host(dir: &Path, tables: &[ObjectTable]) -> Result<(), String> {
         }
         let mut hb = vme_map::ArrayBus::new(&mut host);
         for _ in 0..n {
-            cspace::worklist::step(&mut hb, 1, t);
+            cspace::worklist::step(&mut hb, 1, t, &mut scratch);
         }
         for (name, r) in [
             ("work list", entries.start as usize..entries.end as usize),

@@ -26,6 +26,8 @@ pub struct Board {
     /// The object table's words as last read (one copy loop instead of a call a word; only
     /// the job's beacon is decoded).
     objects_w: [u32; OBJECT_WORDS],
+    /// The jobs' working memory (the differential update's log of decrements).
+    scratch: worklist::Scratch,
 }
 
 /// Passes in a row the object table may read torn before that is a fault. A skipped pass
@@ -58,6 +60,7 @@ impl Board {
             fault: None,
             torn: 0,
             objects_w: [0; OBJECT_WORDS],
+            scratch: worklist::Scratch::new(),
         }
     }
 
@@ -84,7 +87,7 @@ impl Board {
         let me = 1 + (self.id().index() - BoardId::Cspace0.index());
         let (fault, at) = match vme_map::OBJECTS.read_raw(g, &mut self.objects_w) {
             Ok(_) => {
-                let out = worklist::step_words(g, me, &self.objects_w);
+                let out = worklist::step_words(g, me, &self.objects_w, &mut self.scratch);
                 self.last = out;
                 let at = vme_map::layout::work_entry(out.entry);
                 if out.flags.saturated || out.flags.underflow {

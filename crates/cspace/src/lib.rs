@@ -70,8 +70,10 @@ pub enum Error {
 }
 
 /// An interpolated link-2 image, shifted to the disk's polar angle: an x-monotone polygon in
-/// unwrapped angle units (the raster wraps it onto the torus).
+/// unwrapped angle units (the raster wraps it onto the torus). (`repr(C)`: the runtime's
+/// assembly reads it, `__cspace_columns`.)
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Shape {
     /// theta1 of the vertices, increasing.
     pub theta1_u: [i32; CHAIN],

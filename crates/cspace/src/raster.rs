@@ -12,6 +12,7 @@
 
 use crate::counters::{self, Flags, ALL, M1, M2, P1, P2};
 use crate::{Shape, Stripe, UNITS_PER_PIXEL};
+use core::mem::MaybeUninit;
 use vme_map::layout::{cspace_counter, CSPACE_SIDE, CSPACE_STRIPES};
 use vme_map::GlobalBus;
 
@@ -241,9 +242,11 @@ fn slope_mask(a: i32, b: i32, rising: u32, falling: u32) -> u32 {
     (rising & up) | (falling & down)
 }
 
-/// One column of an image: which pixels to update with which counters.
+/// One column of an image: which pixels to update with which counters. (`repr(C)`: the
+/// runtime's assembly writes it, `__cspace_columns`.)
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Column {
+#[repr(C)]
+pub struct Column {
     /// Map column, 0..128.
     col: u32,
     /// First row (unwrapped).
@@ -260,6 +263,34 @@ struct Column {
     upper_mask: u32,
     /// Added to boundary rows: the image's first or last column.
     ends: u32,
+}
+
+/// Not a column: no rows (a [`Cursor`] set to it is one empty run).
+const NO_COLUMN: Column = Column {
+    col: 0,
+    first: END,
+    rows: 0,
+    lower_rows: 0,
+    upper_from: 0,
+    lower_mask: 0,
+    upper_mask: 0,
+    ends: 0,
+};
+
+/// Whether two columns differ in any field. (A function of its own, with or-ed
+/// differences: the compiled field-by-field compare clobbered the condition codes on the
+/// 68k, docs/toolchain.md.)
+#[inline(never)]
+fn differ(a: &Column, b: &Column) -> bool {
+    ((a.col ^ b.col)
+        | (a.first ^ b.first) as u32
+        | (a.rows ^ b.rows)
+        | (a.lower_rows ^ b.lower_rows)
+        | (a.upper_from ^ b.upper_from)
+        | (a.lower_mask ^ b.lower_mask)
+        | (a.upper_mask ^ b.upper_mask)
+        | (a.ends ^ b.ends))
+        != 0
 }
 
 /// Both chains' values at a strip edge, kept for the next column: a column's left edge is
@@ -291,7 +322,7 @@ impl Edge {
 /// chain segment holding the strip's left edge, advanced as the columns go, and `edge` the
 /// last column's right edge.
 #[inline(never)]
-fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize, edge: &mut Edge) -> Column {
+fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize, edge: &mut Edge, out: &mut Column) {
     let t = &s.theta1_u;
     let n = t.len();
     let a = (c * UNITS_PER_PIXEL).max(t[0]);
@@ -343,7 +374,7 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize, edge: &mut Edge) -
     } else {
         0
     };
-    Column {
+    *out = Column {
         col: c as u32 & WRAP,
         first,
         rows: span.clamp(1, CSPACE_SIDE as i32) as u32,
@@ -352,19 +383,28 @@ fn column(s: &Shape, c: i32, c0: i32, c1: i32, k: &mut usize, edge: &mut Edge) -
         lower_mask: M2 | slope_mask(la, lb, P1, M1),
         upper_mask: P2 | slope_mask(ua, ub, M1, P1),
         ends,
-    }
+    };
 }
 
 /// Updates the pixels of one column as five runs of rows (some empty) with one set of
-/// counters each, in one [`Canvas::column`] call: the rows only the lower chain crosses, the
-/// rows both chains cross (below the interior), the interior with all four counters, the
-/// rows both cross (above it), the rows only the upper chain crosses. Every row gets its
-/// edge counters plus the image's end counters, or all four inside; a full column is all
-/// interior. The bounds are taken without branches on compares (sign arithmetic: every
-/// count is below 2^8): the selects the compiler made of the plain form clobbered the
-/// condition codes on the 68k (docs/toolchain.md).
+/// counters each, in one [`Canvas::column`] call (see [`pieces`]).
 #[inline(never)]
-fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
+fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op, buf: &mut [u32; 10]) -> Flags {
+    pieces(k, buf);
+    canvas.column(k.col, k.first as u32, buf, op)
+}
+
+/// The rows of one column as five runs (some empty) with one set of counters each, from
+/// its first row: the rows only the lower chain crosses, the rows both chains cross (below
+/// the interior), the interior with all four counters, the rows both cross (above it), the
+/// rows only the upper chain crosses. Every row gets its edge counters plus the image's end
+/// counters, or all four inside; a full column is all interior. The bounds are taken
+/// without branches on compares (sign arithmetic: every count is below 2^8): the selects
+/// the compiler made of the plain form clobbered the condition codes on the 68k
+/// (docs/toolchain.md). Written through `out`: a returned array goes through the 68k
+/// backend's broken struct-return convention (see [`counters::increment`]).
+#[inline(never)]
+fn pieces(k: &Column, out: &mut [u32; 10]) {
     let rows = k.rows as i32;
     // All ones when the whole column is taken (every counter of every row).
     let full = ((CSPACE_SIDE as i32 - 1 - rows) >> 31) as u32;
@@ -378,7 +418,7 @@ fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
     let lower_to = (k.lower_rows as i32).max(hi).min(rows) & keep | (rows & full as i32);
     let both = k.lower_mask | k.upper_mask | k.ends;
     // The five runs' lengths (every bound is within 0..=rows and they increase).
-    let pieces = [
+    *out = [
         upper_from as u32,
         k.lower_mask | k.ends,
         (lo - upper_from) as u32,
@@ -390,7 +430,6 @@ fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
         (rows - lower_to) as u32,
         k.upper_mask | k.ends,
     ];
-    canvas.column(k.col, k.first as u32, &pieces, op)
 }
 
 /// Draws or erases a link-2 image on the map. (Not inlined: its callers hold the image on
@@ -399,18 +438,425 @@ fn paint<C: Canvas>(canvas: &mut C, k: &Column, op: Op) -> Flags {
 #[inline(never)]
 pub fn shape<C: Canvas>(s: &Shape, canvas: &mut C, op: Op) -> Flags {
     let mut f = Flags::default();
+    let (c0, c1) = columns(&Some(*s));
+    let mut k = 0usize; // segment holding the strip's left edge
+    let mut edge = Edge::NONE;
+    let mut buf = [0u32; 10];
+    let mut col = NO_COLUMN;
+    for c in c0..c1 + 1 {
+        column(s, c, c0, c1, &mut k, &mut edge, &mut col);
+        f.merge(paint(canvas, &col, op, &mut buf));
+    }
+    f
+}
+
+// The layouts `__cspace_columns` in the runtime's assembly reads and writes.
+const _: () = assert!(core::mem::offset_of!(Shape, upper_u) == 132);
+const _: () = assert!(core::mem::offset_of!(Shape, lower_u) == 264);
+const _: () = assert!(core::mem::offset_of!(Shape, wraps) == 396);
+const _: () = assert!(core::mem::size_of::<Column>() == 32);
+
+/// Most columns an image spans: 129 for one all the way round (its first column twice, as
+/// the strip's two ends), fewer for any other (less than a revolution of theta1, plus one
+/// column either side).
+pub const MAX_COLUMNS: usize = 130;
+
+/// Every column `c0..=c1` of image `s` into `out[c - c0]`: what [`column`] gives for each
+/// in turn. On the 68020 it is `__cspace_columns` in the runtime's assembly (the compiled
+/// column spent ~1,100 cycles, its divisions included); the system tests compare the image
+/// with this host code bit for bit.
+#[inline(never)]
+fn all_columns(s: &Shape, c0: i32, c1: i32, out: &mut [MaybeUninit<Column>; MAX_COLUMNS]) {
+    debug_assert!(c1 - c0 < MAX_COLUMNS as i32);
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __cspace_columns(s: *const Shape, c0: i32, c1: i32, out: *mut Column);
+        }
+        // SAFETY: `columns` gives at most MAX_COLUMNS columns; the routine reads `s` and
+        // writes `c1 - c0 + 1` records into `out`.
+        unsafe { __cspace_columns(s, c0, c1, out.as_mut_ptr().cast()) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        let mut k = 0usize;
+        let mut edge = Edge::NONE;
+        let mut col = NO_COLUMN;
+        for c in c0..c1 + 1 {
+            column(s, c, c0, c1, &mut k, &mut edge, &mut col);
+            out[(c - c0) as usize].write(col);
+        }
+    }
+}
+
+/// Words a [`RunLog`] holds: 16 KiB, a worst-case job's decrements several times over (a
+/// 2-inch obstacle's two link-2 images are some 200 columns of three words when they must
+/// be erased whole; a small move leaves a few runs a column, one word each).
+pub const LOG_WORDS: usize = 4096;
+
+/// Bit of a [`RunLog`] word that starts a whole column (three words) instead of a run.
+const WHOLE: u32 = 1 << 31;
+
+/// The counters of `mask` (a sum of [`P1`], [`M1`], [`P2`], [`M2`]) as a nibble, +theta1
+/// in bit 3 down to -theta2 in bit 0.
+#[inline(always)]
+fn nibble(mask: u32) -> u32 {
+    (mask >> 21 & 8) | (mask >> 14 & 4) | (mask >> 7 & 2) | (mask & 1)
+}
+
+/// The counters of a [`nibble`].
+#[inline(always)]
+fn unnibble(n: u32) -> u32 {
+    (n & 8) << 21 | (n & 4) << 14 | (n & 2) << 7 | (n & 1)
+}
+
+/// The decrements of a differential update ([`pair`]), kept from its first half, which
+/// computes both images' columns, for its second. A run of rows is one word: the column in
+/// bits 24-30, the first row (wrapped) in bits 16-22, the rows (1-128) in bits 8-15 and the
+/// counters as a [`nibble`] in bits 0-3. A whole column to erase is three words: [`WHOLE`]
+/// with the column in bits 24-30, its rows, lower-chain rows and first upper-chain row in
+/// bits 16-23, 8-15 and 0-7; its first row; and its lower-chain, upper-chain and end
+/// counters as nibbles in bits 0-3, 4-7 and 8-11.
+pub struct RunLog {
+    /// Written below `len` (left uninitialised: zeroing it cost the board 0.1 M cycles at
+    /// power-up, past its first heartbeat's deadline).
+    words: [MaybeUninit<u32>; LOG_WORDS],
+    len: usize,
+}
+
+impl Default for RunLog {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RunLog {
+    /// An empty log.
+    pub const fn new() -> Self {
+        Self {
+            words: [const { MaybeUninit::uninit() }; LOG_WORDS],
+            len: 0,
+        }
+    }
+    /// Words held.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+    /// Whether it holds nothing.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+    /// Forgets every word from the `n`-th on.
+    pub fn truncate(&mut self, n: usize) {
+        self.len = self.len.min(n);
+    }
+    /// Adds a run (`rows` of column `col` from row `row`, counters `mask`); false when the
+    /// log is full (nothing added).
+    pub(crate) fn push(&mut self, col: u32, row: i32, rows: u32, mask: u32) -> bool {
+        if self.len >= LOG_WORDS {
+            return false;
+        }
+        self.words[self.len].write(
+            (col & WRAP) << 24 | (row as u32 & WRAP) << 16 | (rows & 0xFF) << 8 | nibble(mask),
+        );
+        self.len += 1;
+        true
+    }
+    /// Adds a whole column; false when the log is full (nothing added).
+    fn push_column(&mut self, k: &Column) -> bool {
+        if self.len + 3 > LOG_WORDS {
+            return false;
+        }
+        self.words[self.len].write(
+            WHOLE
+                | (k.col & WRAP) << 24
+                | (k.rows & 0xFF) << 16
+                | (k.lower_rows & 0xFF) << 8
+                | (k.upper_from & 0xFF),
+        );
+        self.words[self.len + 1].write(k.first as u32);
+        self.words[self.len + 2]
+            .write(nibble(k.lower_mask) | nibble(k.upper_mask) << 4 | nibble(k.ends) << 8);
+        self.len += 3;
+        true
+    }
+    /// Decrements everything held (the second half of the updates that logged it).
+    #[inline(never)]
+    pub fn erase<C: Canvas>(&self, canvas: &mut C) -> Flags {
+        let mut f = Flags::default();
+        // A run's pieces (one run, then nothing) and a whole column's.
+        let mut p = [0u32; 10];
+        let mut whole = [0u32; 10];
+        // SAFETY: every word below `len` was written by `push` or `push_column`.
+        let word = |i: usize| unsafe { self.words[i].assume_init() };
+        let mut i = 0;
+        while i < self.len {
+            let w = word(i);
+            if w & WHOLE != 0 {
+                let m = word(i + 2);
+                let k = Column {
+                    col: w >> 24 & WRAP,
+                    first: word(i + 1) as i32,
+                    rows: w >> 16 & 0xFF,
+                    lower_rows: w >> 8 & 0xFF,
+                    upper_from: w & 0xFF,
+                    lower_mask: unnibble(m & 15),
+                    upper_mask: unnibble(m >> 4 & 15),
+                    ends: unnibble(m >> 8 & 15),
+                };
+                f.merge(paint(canvas, &k, Op::Erase, &mut whole));
+                i += 3;
+            } else {
+                p[0] = w >> 8 & 0xFF;
+                p[1] = unnibble(w & 15);
+                f.merge(canvas.column(w >> 24, w >> 16 & WRAP, &p, Op::Erase));
+                i += 1;
+            }
+        }
+        f
+    }
+}
+
+/// Past every row of every column (rows are unwrapped, within a few revolutions).
+const END: i32 = 1 << 24;
+
+/// The smaller of two values within +-2^30, by sign arithmetic, in a function of its own:
+/// inlined, the compiler turned it (and every other form of it) back into a select that
+/// clobbered the condition codes on the 68k (docs/toolchain.md).
+#[inline(never)]
+fn min_i(a: i32, b: i32) -> i32 {
+    let d = a - b;
+    b + (d & (d >> 31))
+}
+
+/// A column's rows as seven runs (see [`pieces`]): nothing below the column, its five runs,
+/// nothing above it. Run `j` ends (unwrapped, exclusive) at `ends[j]` with counters
+/// `masks[j]`; the last ends at [`END`]. Runs may be empty. `p` is the run being walked.
+struct Cursor {
+    ends: [i32; 7],
+    masks: [u32; 7],
+    p: usize,
+}
+
+impl Cursor {
+    /// No column yet.
+    const NONE: Cursor = Cursor {
+        ends: [END; 7],
+        masks: [0; 7],
+        p: 0,
+    };
+    /// At the first row of column `k`'s seven runs.
+    fn set(&mut self, k: &Column, pieces_buf: &mut [u32; 10]) {
+        pieces(k, pieces_buf);
+        let mut at = k.first;
+        self.ends[0] = at;
+        self.masks[0] = 0;
+        for j in 0..5 {
+            at += pieces_buf[2 * j] as i32;
+            self.ends[j + 1] = at;
+            self.masks[j + 1] = pieces_buf[2 * j + 1];
+        }
+        self.ends[6] = END;
+        self.masks[6] = 0;
+        self.p = 0;
+    }
+    /// Moves on to the run that holds row `r` (below [`END`]).
+    #[inline(always)]
+    fn advance(&mut self, r: i32) {
+        while self.ends[self.p] <= r {
+            self.p += 1;
+        }
+    }
+}
+
+/// What a [`pair`] works in: both images' columns and the two cursors that walk a column
+/// of each (14 KiB; given by the caller so that they are not arrays on `pair`'s own stack
+/// frame, which the 68k backend indexes wrongly, llvm/llvm-project#200984).
+pub struct PairWork {
+    /// The old and the new image's columns, written by each pair before it reads them
+    /// (left uninitialised: see [`RunLog`]).
+    cols: [[MaybeUninit<Column>; MAX_COLUMNS]; 2],
+    cur: [Cursor; 2],
+    buf: [u32; 10],
+}
+
+impl PairWork {
+    /// Empty.
+    pub const fn new() -> Self {
+        Self {
+            cols: [[const { MaybeUninit::uninit() }; MAX_COLUMNS]; 2],
+            cur: [Cursor::NONE, Cursor::NONE],
+            buf: [0; 10],
+        }
+    }
+}
+
+impl Default for PairWork {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Whether column `c` is within `range` (inclusive), by sign arithmetic in a function of
+/// its own: compiled inline, the compare's condition codes were clobbered by register
+/// copies before the branch on the 68k (docs/toolchain.md).
+#[inline(never)]
+fn within(c: i32, range: (i32, i32)) -> bool {
+    ((c - range.0) | (range.1 - c)) >> 31 == 0
+}
+
+/// Column `c` of an image whose columns `range` are in `cols` ([`NO_COLUMN`] outside);
+/// the caller has written every column of `range`.
+#[inline(never)]
+fn column_at(cols: &[MaybeUninit<Column>; MAX_COLUMNS], range: (i32, i32), c: i32) -> &Column {
+    if within(c, range) {
+        // SAFETY: the pair wrote every column of `range` (`all_columns`) before reading.
+        unsafe { cols[(c - range.0) as usize].assume_init_ref() }
+    } else {
+        &NO_COLUMN
+    }
+}
+
+/// Whether two columns of one map column are close enough to update by their difference
+/// (both there, first and last rows within four of each other); otherwise the new one is
+/// drawn and the old one erased whole (fewer, longer runs).
+#[inline(never)]
+fn near(a: &Column, b: &Column) -> bool {
+    let d0 = a.first - b.first;
+    let d1 = d0 + a.rows as i32 - b.rows as i32;
+    let (d0, d1) = (d0 + 1, d1 + 1); // within 0..=2 when near
+    let both = ((a.rows | b.rows) != 0) & (a.rows != 0) & (b.rows != 0);
+    both & ((d0 | d1 | (2 - d0) | (2 - d1)) >> 31 == 0)
+}
+
+/// The unwrapped columns `c0..=c1` of image `s` (none: an empty range).
+fn columns(s: &Option<Shape>) -> (i32, i32) {
+    let Some(s) = s else {
+        return (END, -END);
+    };
     let t = &s.theta1_u;
-    let (c0, c1) = if s.wraps {
+    if s.wraps {
         let c0 = pix(t[0]);
         (c0, c0 + CSPACE_SIDE as i32)
     } else {
         (pix(t[0] - 1), pix(t[t.len() - 1] + 1))
-    };
-    let mut k = 0usize; // segment holding the strip's left edge
-    let mut edge = Edge::NONE;
-    for c in c0..c1 + 1 {
-        let col = column(s, c, c0, c1, &mut k, &mut edge);
-        f.merge(paint(canvas, &col, op));
     }
-    f
+}
+
+/// Moves `old` by whole revolutions (the same pixels) so that it lies within half a
+/// revolution of `new` along theta1: then their columns and rows pair up unwrapped.
+pub fn align(old: &mut Shape, new: &Shape) {
+    let mut d = 0;
+    while old.theta1_u[0] + d - new.theta1_u[0] > crate::HALF_REV {
+        d -= crate::UNITS_PER_REV;
+    }
+    while old.theta1_u[0] + d - new.theta1_u[0] < -crate::HALF_REV {
+        d += crate::UNITS_PER_REV;
+    }
+    for k in 0..old.theta1_u.len() {
+        old.theta1_u[k] += d;
+        old.upper_u[k] += d;
+        old.lower_u[k] += d;
+    }
+}
+
+/// A link-2 image moved (`old` to `new`; either may be absent) as a differential update:
+/// every pixel counter the new image sets and the old one does not is incremented, every
+/// one the old sets and the new does not is decremented, the rest are left alone. After
+/// both halves the map is what drawing `new` and erasing `old` would leave, but a small
+/// move touches only the rows where the images' boundaries moved instead of every pixel of
+/// both images twice (the interiors of a 2-inch obstacle's images are thousands of pixels).
+/// Columns that moved far (or that only one image has) are drawn and erased whole.
+///
+/// With `log`, this is the first half: the increments go to the canvas and the decrements
+/// to the log, for [`RunLog::erase`] once every first half of the job is done (new before
+/// old: no void opens, thesis lines 1199-1210). Returns false when the log filled up (this
+/// pair's words are then dropped and the caller runs the second half without a log).
+/// Without `log`, this is the second half: the decrements go to the canvas. `old` must be
+/// [`align`]ed to `new`.
+#[inline(never)]
+pub fn pair<C: Canvas>(
+    old: &Option<Shape>,
+    new: &Option<Shape>,
+    canvas: &mut C,
+    mut log: Option<&mut RunLog>,
+    w: &mut PairWork,
+) -> (Flags, bool) {
+    let mut f = Flags::default();
+    let mut ok = true;
+    let start = log.as_deref().map_or(0, RunLog::len);
+    let (oc, nc) = (columns(old), columns(new));
+    if let Some(s) = old {
+        all_columns(s, oc.0, oc.1, &mut w.cols[0]);
+    }
+    if let Some(s) = new {
+        all_columns(s, nc.0, nc.1, &mut w.cols[1]);
+    }
+    let lo = min_i(oc.0, nc.0);
+    let hi = -min_i(-oc.1, -nc.1);
+    let mut one = [0u32; 10];
+    // An index loop counted up to the number of columns (a `lo..=hi` range compiled to a
+    // select that clobbered the condition codes on the 68k).
+    let count = hi - lo + 1;
+    let mut i = 0;
+    while i < count {
+        let c = lo + i;
+        i += 1;
+        let ocol = column_at(&w.cols[0], oc, c);
+        let ncol = column_at(&w.cols[1], nc, c);
+        // The same column in both images (most of them, after a small move): nothing.
+        if !differ(ocol, ncol) {
+            continue;
+        }
+        if !near(ocol, ncol) {
+            if let Some(l) = log.as_deref_mut() {
+                if ncol.rows != 0 {
+                    f.merge(paint(canvas, ncol, Op::Draw, &mut w.buf));
+                }
+                if ocol.rows != 0 && ok {
+                    ok = l.push_column(ocol);
+                }
+            } else if ocol.rows != 0 {
+                f.merge(paint(canvas, ocol, Op::Erase, &mut w.buf));
+            }
+            continue;
+        }
+        w.cur[0].set(ocol, &mut w.buf);
+        w.cur[1].set(ncol, &mut w.buf);
+        let col = ncol.col;
+        let mut r = -END;
+        loop {
+            let n = min_i(w.cur[0].ends[w.cur[0].p], w.cur[1].ends[w.cur[1].p]);
+            let (mo, mn) = (w.cur[0].masks[w.cur[0].p], w.cur[1].masks[w.cur[1].p]);
+            let rows = (n - r) as u32;
+            one[0] = rows;
+            if let Some(l) = log.as_deref_mut() {
+                one[1] = mn & !mo;
+                if one[1] != 0 {
+                    f.merge(canvas.column(col, r as u32, &one, Op::Draw));
+                }
+                let down = mo & !mn;
+                if down != 0 && ok {
+                    ok = l.push(col, r, rows, down);
+                }
+            } else {
+                one[1] = mo & !mn;
+                if one[1] != 0 {
+                    f.merge(canvas.column(col, r as u32, &one, Op::Erase));
+                }
+            }
+            if n >= END {
+                break;
+            }
+            r = n;
+            w.cur[0].advance(r);
+            w.cur[1].advance(r);
+        }
+    }
+    if !ok {
+        if let Some(l) = log {
+            l.truncate(start);
+        }
+    }
+    (f, ok)
 }

@@ -11,7 +11,8 @@
 //! board's filter still reports where it was. An obstacle whose beacon turns invalid keeps
 //! its last image.
 
-use crate::{apply, images, BusCanvas, Disk, Error, Flags, Op, POLAR_MARGIN_UM};
+use crate::raster::{self, PairWork, RunLog};
+use crate::{images, BusCanvas, Disk, Error, Flags, Images, Op, Stripe, POLAR_MARGIN_UM};
 use vme_map::layout::{work_entry, WORK_CURSOR};
 use vme_map::record::Record;
 use vme_map::records::{beacon_flags, Beacon, ObjectTable, WorkEntry};
@@ -157,26 +158,151 @@ pub fn drawn_sweep_mm(g: &mut (impl GlobalBus + ?Sized), i: u32) -> (i32, i32) {
     unpack_sweep(g.read_u32(work_entry(i) + 4 * SWEEP_WORD))
 }
 
-/// Draws (`op`) the images of an entry-like position and sweep.
-fn draw<B: GlobalBus + ?Sized>(
-    g: &mut B,
-    x: i32,
-    y: i32,
-    sweep: (i32, i32),
-    r: i32,
-    op: Op,
-) -> Result<Flags, Error> {
-    let (disks, n) = cover(x, y, sweep.0, sweep.1, r);
-    let mut f = Flags::default();
-    // An index loop: the slice loop `&disks[..n]` compiled (opt-level z) to a loop that
-    // ended before its first pass on the 68k (found by `sim-host bench cspace`).
-    for (i, d) in disks.iter().enumerate() {
-        if i < n {
-            let im = images(d)?;
-            f.merge(apply(&im, &mut BusCanvas(&mut *g), op));
+/// A job's working memory, kept by the board between jobs (31 KiB: not on the stack, and
+/// the 68k backend mis-indexes arrays on a function's own frame, llvm/llvm-project#200984).
+pub struct Scratch {
+    /// The decrements of the job's first half ([`raster::pair`]).
+    log: RunLog,
+    pair: PairWork,
+    /// The images of the new and the old cover disk being paired.
+    new: Images,
+    old: Images,
+    /// Per cover disk: the old link-1 stripe, erased in the second half.
+    old_stripes: [Option<Stripe>; MAX_COVER],
+    /// Per cover disk and link-2 image (front, rear): its decrements are in the log.
+    logged: [bool; 2 * MAX_COVER],
+}
+
+impl Scratch {
+    /// Empty working memory.
+    pub const fn new() -> Self {
+        const NO: Images = Images {
+            stripe: None,
+            front: None,
+            rear: None,
+        };
+        Self {
+            log: RunLog::new(),
+            pair: PairWork::new(),
+            new: NO,
+            old: NO,
+            old_stripes: [None; MAX_COVER],
+            logged: [false; 2 * MAX_COVER],
         }
     }
-    Ok(f)
+    /// Runs the last job's second half took from the log (for the bench).
+    pub fn logged_runs(&self) -> usize {
+        self.log.len()
+    }
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The images of cover disk `i` of `disks` (or none past `n`) into `out`.
+fn images_of(disks: &([Disk; MAX_COVER], usize), i: usize, out: &mut Images) {
+    *out = Images::default();
+    if i < disks.1 {
+        if let Ok(im) = images(&disks.0[i]) {
+            *out = im;
+        }
+    }
+}
+
+/// Moves an obstacle's images from the cover disks `old` to `new` (thesis lines 1199-1210:
+/// new before old). Cover disk `i` of the new position is paired with disk `i` of the old
+/// (the same part of the obstacle, moved a little), and each pair's link-2 images are
+/// updated differentially ([`raster::pair`]): every increment of every pair first, then
+/// every decrement, so the new images are whole before anything of the old ones goes and
+/// no void opens. Link-1 stripes are drawn and erased whole (a few words each).
+///
+/// Fails before touching the map when the new disks have no images; when the old ones have
+/// none (never drawn so) the new images are drawn and the error returned with them.
+fn update<B: GlobalBus + ?Sized>(
+    g: &mut B,
+    new: &([Disk; MAX_COVER], usize),
+    old: &([Disk; MAX_COVER], usize),
+    sc: &mut Scratch,
+) -> Result<(Flags, Option<Error>), Error> {
+    // Every cover disk of a position has the same radius: one check covers them all.
+    crate::family(new.0[0].r_um)?;
+    let (old, old_err) = match crate::family(old.0[0].r_um) {
+        Err(e) if old.1 > 0 => ((old.0, 0), Some(e)),
+        _ => (*old, None),
+    };
+    let mut f = Flags::default();
+    let mut canvas = BusCanvas(&mut *g);
+    let pairs = new.1.max(old.1);
+    sc.log.truncate(0);
+    for i in 0..pairs {
+        images_of(new, i, &mut sc.new);
+        images_of(&old, i, &mut sc.old);
+        if let Some(s) = &sc.new.stripe {
+            f.merge(raster::stripe(s, &mut canvas, Op::Draw));
+        }
+        sc.old_stripes[i] = sc.old.stripe;
+        if let (Some(o), Some(n)) = (&mut sc.old.front, &sc.new.front) {
+            raster::align(o, n);
+        }
+        if let (Some(o), Some(n)) = (&mut sc.old.rear, &sc.new.rear) {
+            raster::align(o, n);
+        }
+        let (fl, ok) = raster::pair(
+            &sc.old.front,
+            &sc.new.front,
+            &mut canvas,
+            Some(&mut sc.log),
+            &mut sc.pair,
+        );
+        f.merge(fl);
+        sc.logged[2 * i] = ok;
+        let (fl, ok) = raster::pair(
+            &sc.old.rear,
+            &sc.new.rear,
+            &mut canvas,
+            Some(&mut sc.log),
+            &mut sc.pair,
+        );
+        f.merge(fl);
+        sc.logged[2 * i + 1] = ok;
+    }
+    // Second half: the old images go.
+    f.merge(sc.log.erase(&mut canvas));
+    for i in 0..pairs {
+        if let Some(s) = &sc.old_stripes[i] {
+            f.merge(raster::stripe(s, &mut canvas, Op::Erase));
+        }
+        if sc.logged[2 * i] && sc.logged[2 * i + 1] {
+            continue;
+        }
+        // The log was full: this pair's decrements are computed again.
+        images_of(new, i, &mut sc.new);
+        images_of(&old, i, &mut sc.old);
+        if !sc.logged[2 * i] {
+            if let (Some(o), Some(n)) = (&mut sc.old.front, &sc.new.front) {
+                raster::align(o, n);
+            }
+            let (fl, _) = raster::pair(
+                &sc.old.front,
+                &sc.new.front,
+                &mut canvas,
+                None,
+                &mut sc.pair,
+            );
+            f.merge(fl);
+        }
+        if !sc.logged[2 * i + 1] {
+            if let (Some(o), Some(n)) = (&mut sc.old.rear, &sc.new.rear) {
+                raster::align(o, n);
+            }
+            let (fl, _) = raster::pair(&sc.old.rear, &sc.new.rear, &mut canvas, None, &mut sc.pair);
+            f.merge(fl);
+        }
+    }
+    Ok((f, old_err))
 }
 
 /// What one pass of [`step`] did.
@@ -217,10 +343,15 @@ pub fn entry(g: &mut (impl GlobalBus + ?Sized), i: u32) -> WorkEntry {
 /// One job of C-space board `me` (1-based: 1 + its C-space index) with the object table
 /// `objects` just read: takes the next entry from the shared cursor and brings its image up
 /// to date.
-pub fn step<B: GlobalBus + ?Sized>(g: &mut B, me: u32, objects: &ObjectTable) -> Outcome {
+pub fn step<B: GlobalBus + ?Sized>(
+    g: &mut B,
+    me: u32,
+    objects: &ObjectTable,
+    sc: &mut Scratch,
+) -> Outcome {
     let mut words = [0u32; OBJECT_WORDS];
     objects.encode(&mut |k, v| words[k as usize] = v);
-    step_words(g, me, &words)
+    step_words(g, me, &words, sc)
 }
 
 /// [`step`] with the object table as its words in global RAM (what a board reads under the
@@ -229,6 +360,7 @@ pub fn step_words<B: GlobalBus + ?Sized>(
     g: &mut B,
     me: u32,
     objects: &[u32; OBJECT_WORDS],
+    sc: &mut Scratch,
 ) -> Outcome {
     let i = next_entry(g);
     let claim = work_entry(i);
@@ -241,7 +373,7 @@ pub fn step_words<B: GlobalBus + ?Sized>(
     }
     let mut e = entry(g, i);
     let b = beacon_of(objects, i);
-    let out = job(g, i, &b, &mut e);
+    let out = job(g, i, &b, &mut e, sc);
     // Write the entry back with the claim still ours, then release it last.
     e.encode(&mut |w, v| {
         if w != 0 {
@@ -285,7 +417,13 @@ fn needs_redraw(e: &WorkEntry, b: &Beacon) -> bool {
 
 /// The work on claimed entry `i` (held in `e`, updated in place) for beacon sample `b`.
 #[inline(never)]
-fn job<B: GlobalBus + ?Sized>(g: &mut B, i: u32, b: &Beacon, e: &mut WorkEntry) -> Outcome {
+fn job<B: GlobalBus + ?Sized>(
+    g: &mut B,
+    i: u32,
+    b: &Beacon,
+    e: &mut WorkEntry,
+    sc: &mut Scratch,
+) -> Outcome {
     let mut out = Outcome {
         entry: i,
         ..Default::default()
@@ -306,15 +444,16 @@ fn job<B: GlobalBus + ?Sized>(g: &mut B, i: u32, b: &Beacon, e: &mut WorkEntry) 
     }
     // New image first, then the old one goes: no void ever opens.
     let r_um = radius(g, i);
-    match draw(g, b.x_um, b.y_um, (sx, sy), r_um, Op::Draw) {
-        Ok(f) => {
+    let new = cover(b.x_um, b.y_um, sx, sy, r_um);
+    let (was_x, was_y) = sweep_of(e);
+    let mut old = cover(e.x_um, e.y_um, was_x, was_y, e.r_um);
+    if !drawn {
+        old.1 = 0;
+    }
+    match update(g, &new, &old, sc) {
+        Ok((f, err)) => {
             out.flags.merge(f);
-            if drawn {
-                match draw(g, e.x_um, e.y_um, sweep_of(e), e.r_um, Op::Erase) {
-                    Ok(f) => out.flags.merge(f),
-                    Err(err) => out.error = Some(err),
-                }
-            }
+            out.error = err;
             e.x_um = b.x_um;
             e.y_um = b.y_um;
             e.r_um = r_um;
