@@ -258,7 +258,7 @@ enum Code {
 /// One board's code, run natively.
 enum Native {
     Sensing(Box<board_sensing::Board>),
-    Cspace(Box<board_cspace::Board>),
+    Cspace(Box<board_cspace::Board<Box<cspace::worklist::Scratch>>>),
     Servo(Box<board_servo::Board>),
     Reflex(Box<board_reflex::Board>),
     Planner(Box<board_planner::Board>),
@@ -273,7 +273,10 @@ impl Native {
             BoardId::Planner => {
                 Native::Planner(Box::new(board_planner::Board::with_config(planner)))
             }
-            c => Native::Cspace(Box::new(board_cspace::Board::new(c))),
+            c => Native::Cspace(Box::new(board_cspace::Board::new(
+                c,
+                Box::new(cspace::worklist::Scratch::new()),
+            ))),
         }
     }
     fn boot(&mut self, g: &mut dyn GlobalBus, io: &mut impl IoBus) {

@@ -168,7 +168,10 @@ fn a_torn_object_table_is_a_fault_only_when_it_stays_torn() {
     let mut global = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
     let mut g = vme_map::ArrayBus::new(&mut global);
     vme_map::init_header(&mut g);
-    let mut board = board_cspace::Board::new(vme_map::BoardId::Cspace0);
+    let mut board = board_cspace::Board::new(
+        vme_map::BoardId::Cspace0,
+        Box::new(cspace::worklist::Scratch::new()),
+    );
     board.boot(&mut g, &mut NoIo);
     vme_map::OBJECTS.publish_torn(&mut g, &vme_map::records::ObjectTable::default());
     let slot = vme_map::BoardSlot::of(vme_map::BoardId::Cspace0);

@@ -1,4 +1,4 @@
-//! The condition-code checks: refuse images in which LLVM's M68k backend
+//! The miscompile checks: refuse images in which LLVM's M68k backend
 //!
 //! 1. placed a register move between an instruction that sets the condition codes and the
 //!    branch that reads them (llvm/llvm-project#152816, #213564), or
@@ -7,7 +7,9 @@
 //!    stale X from older code, or
 //! 3. emitted a 32-bit `DIVS.L`/`DIVU.L` whose remainder register differs from its quotient
 //!    register: the backend encodes the remainder field as %d0 whatever it allocated
-//!    (llvm/llvm-project#224186), so the divide silently overwrites %d0.
+//!    (llvm/llvm-project#224186), so the divide silently overwrites %d0, or
+//! 4. gave a stack frame over 32 KiB a `LINK.W` whose 16-bit displacement wrapped to a
+//!    positive one, so the function's locals lie over its caller's frame.
 //!
 //! See docs/toolchain.md.
 //!
@@ -220,6 +222,27 @@ pub fn scan(disassembly: &str) -> Vec<Hit> {
                 }
             }
         }
+        // A frame over 32 KiB: the backend emits LINK.W with the displacement wrapped to
+        // 16 bits, positive, so the locals overlap the caller's stack (found when the
+        // C-space board's job memory grew past 32 KiB: the image never beat).
+        if mn == "linkw" {
+            if let Some(d) = ops
+                .split_once(",#")
+                .and_then(|(_, d)| d.trim().parse::<i32>().ok())
+            {
+                if d > 0 {
+                    hits.push(Hit {
+                        function: function.clone(),
+                        branch_addr: addr,
+                        branch: rest.to_string(),
+                        clobber: format!(
+                            "a stack frame of {} bytes wrapped to LINK.W #{d} (keep large data off the stack)",
+                            65536 - d
+                        ),
+                    });
+                }
+            }
+        }
         if ["divsll", "divull"].contains(&mn) {
             let regs: Vec<&str> = ops.split(',').map(str::trim).collect();
             if regs.len() == 3 && regs[1] != regs[2] {
@@ -297,6 +320,15 @@ mod tests {
         assert!(scan(call).is_empty());
         let scc = "00000100 <f>:\n 100:\tcmpl %d1,%d0\n 102:\tmoveq #0,%d2\n 104:\tseq %d3\n";
         assert_eq!(scan(scc).len(), 1, "Scc reads the flags too");
+    }
+
+    #[test]
+    fn a_wrapped_stack_frame_is_found() {
+        let bad = "00001eba <main>:\n    1eba:\tlinkw %fp,#32256\n";
+        let ok = "00001eba <main>:\n    1eba:\tlinkw %fp,#-312\n";
+        assert_eq!(scan(bad).len(), 1);
+        assert!(scan(bad)[0].clobber.contains("33280 bytes"));
+        assert!(scan(ok).is_empty());
     }
 
     #[test]

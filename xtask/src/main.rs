@@ -141,7 +141,7 @@ fn check_ccr(elf: &Path) -> Result<(), String> {
         return Ok(());
     }
     let mut msg = format!(
-        "{}: LLVM M68k condition-code miscompile ({} sites; docs/toolchain.md):",
+        "{}: LLVM M68k miscompile ({} sites; docs/toolchain.md):",
         elf.display(),
         fatal.len()
     );

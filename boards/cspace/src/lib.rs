@@ -11,13 +11,15 @@
 #![deny(missing_docs)]
 
 use board_shell::Shell;
+use core::borrow::BorrowMut;
 use cspace::worklist::OBJECT_WORDS;
 use cspace::worklist::{self, Outcome};
 use regs::IoBus;
 use vme_map::{BoardId, BoardState, FaultCode, GlobalBus};
 
-/// The cspace board's state between main-loop passes.
-pub struct Board {
+/// The cspace board's state between main-loop passes; `S` holds the jobs' work memory (the
+/// image's in its `.uninit` section, the simulator's boxed).
+pub struct Board<S: BorrowMut<worklist::Scratch>> {
     shell: Shell,
     last: Outcome,
     fault: Option<FaultCode>,
@@ -26,8 +28,8 @@ pub struct Board {
     /// The object table's words as last read (one copy loop instead of a call a word; only
     /// the job's beacon is decoded).
     objects_w: [u32; OBJECT_WORDS],
-    /// The jobs' working memory (the differential update's log of decrements).
-    scratch: worklist::Scratch,
+    /// The jobs' working memory (the differential update's columns and log of decrements).
+    scratch: S,
 }
 
 /// Passes in a row the object table may read torn before that is a fault. A skipped pass
@@ -36,14 +38,14 @@ pub struct Board {
 /// caught mid-publish stands still), far shorter than a dead writer goes unnoticed.
 pub const TORN_PASSES: u8 = 64;
 
-impl Board {
-    /// The board's identity from its board-ID switch (0..=2 selects the C-space slot).
-    pub fn identify(io: &mut impl IoBus) -> Option<BoardId> {
-        BoardId::cspace(io.read16(regs::BOARD_ID) as u32)
-    }
+/// The board's identity from its board-ID switch (0..=2 selects the C-space slot).
+pub fn identify(io: &mut impl IoBus) -> Option<BoardId> {
+    BoardId::cspace(io.read16(regs::BOARD_ID) as u32)
+}
 
-    /// A fresh board with identity `id` (see [`Board::identify`]).
-    pub const fn new(id: BoardId) -> Self {
+impl<S: BorrowMut<worklist::Scratch>> Board<S> {
+    /// A fresh board with identity `id` (see [`identify`]) and work memory `scratch`.
+    pub const fn new(id: BoardId, scratch: S) -> Self {
         Self {
             shell: Shell::new(id),
             last: Outcome {
@@ -60,7 +62,7 @@ impl Board {
             fault: None,
             torn: 0,
             objects_w: [0; OBJECT_WORDS],
-            scratch: worklist::Scratch::new(),
+            scratch,
         }
     }
 
@@ -87,7 +89,7 @@ impl Board {
         let me = 1 + (self.id().index() - BoardId::Cspace0.index());
         let (fault, at) = match vme_map::OBJECTS.read_raw(g, &mut self.objects_w) {
             Ok(_) => {
-                let out = worklist::step_words(g, me, &self.objects_w, &mut self.scratch);
+                let out = worklist::step_words(g, me, &self.objects_w, self.scratch.borrow_mut());
                 self.last = out;
                 let at = vme_map::layout::work_entry(out.entry);
                 if out.flags.saturated || out.flags.underflow {

@@ -3,6 +3,8 @@
 #![no_main]
 
 use board_cspace::Board;
+use core::mem::MaybeUninit;
+use cspace::worklist::Scratch;
 use regs::MmioIo;
 use vme_map::bus::MmioGlobal;
 
@@ -11,11 +13,18 @@ rt::entry!(vme_map::BoardId::Cspace0, main, safe_stop);
 fn main() -> ! {
     // SAFETY: this image runs on a board that maps global RAM and its private I/O.
     let (mut g, mut io) = unsafe { (MmioGlobal::new(), MmioIo::new()) };
-    let Some(id) = Board::identify(&mut io) else {
+    let Some(id) = board_cspace::identify(&mut io) else {
         panic!("board-ID switch out of range (C-space boards are 0..=2)");
     };
     rt::set_board(id);
-    let mut board = Board::new(id);
+    // The jobs' 33 KiB of work memory: outside .bss (not zeroed at reset) and off the
+    // stack (a frame over 32 KiB got a LINK.W with its displacement wrapped, positive:
+    // docs/toolchain.md).
+    #[link_section = ".uninit.cspace_scratch"]
+    static mut SCRATCH: MaybeUninit<Scratch> = MaybeUninit::uninit();
+    // SAFETY: main runs once; nothing else names SCRATCH.
+    let scratch = Scratch::init(unsafe { &mut *core::ptr::addr_of_mut!(SCRATCH) });
+    let mut board = Board::new(id, scratch);
     board.boot(&mut g, &mut io);
     loop {
         board.poll(&mut g, &mut io);

@@ -538,6 +538,14 @@ impl RunLog {
             len: 0,
         }
     }
+    /// Makes `*p` an empty log without writing its words ([`crate::worklist::Scratch::init`]).
+    ///
+    /// # Safety
+    /// `p` is valid for writes of a `RunLog`.
+    pub(crate) unsafe fn init(p: *mut RunLog) {
+        // SAFETY: by the caller; the words are `MaybeUninit`.
+        unsafe { core::ptr::addr_of_mut!((*p).len).write(0) }
+    }
     /// Words held.
     pub fn len(&self) -> usize {
         self.len
@@ -669,22 +677,38 @@ impl Cursor {
     }
 }
 
-/// What a [`pair`] works in: both images' columns and the two cursors that walk a column
-/// of each (14 KiB; given by the caller so that they are not arrays on `pair`'s own stack
+/// What a [`pair`] works in: both images' columns, the records of their walk and the two
+/// cursors the host's walk uses (15 KiB; given by the caller so that they are not arrays on `pair`'s own stack
 /// frame, which the 68k backend indexes wrongly, llvm/llvm-project#200984).
 pub struct PairWork {
     /// The old and the new image's columns, written by each pair before it reads them
     /// (left uninitialised: see [`RunLog`]).
     cols: [[MaybeUninit<Column>; MAX_COLUMNS]; 2],
+    /// The walk's records, written before they are read (uninitialised, as `cols`).
+    recs: [MaybeUninit<Rec>; MAX_RECS],
     cur: [Cursor; 2],
     buf: [u32; 10],
 }
 
 impl PairWork {
+    /// Makes `*p` usable without writing its columns and records
+    /// ([`crate::worklist::Scratch::init`]).
+    ///
+    /// # Safety
+    /// `p` is valid for writes of a `PairWork`.
+    pub(crate) unsafe fn init(p: *mut PairWork) {
+        use core::ptr::addr_of_mut;
+        // SAFETY: by the caller; the columns and records are `MaybeUninit`.
+        unsafe {
+            addr_of_mut!((*p).cur).write([Cursor::NONE, Cursor::NONE]);
+            addr_of_mut!((*p).buf).write([0; 10]);
+        }
+    }
     /// Empty.
     pub const fn new() -> Self {
         Self {
             cols: [[const { MaybeUninit::uninit() }; MAX_COLUMNS]; 2],
+            recs: [const { MaybeUninit::uninit() }; MAX_RECS],
             cur: [Cursor::NONE, Cursor::NONE],
             buf: [0; 10],
         }
@@ -715,18 +739,6 @@ fn column_at(cols: &[MaybeUninit<Column>; MAX_COLUMNS], range: (i32, i32), c: i3
     } else {
         &NO_COLUMN
     }
-}
-
-/// Whether two columns of one map column are close enough to update by their difference
-/// (both there, first and last rows within four of each other); otherwise the new one is
-/// drawn and the old one erased whole (fewer, longer runs).
-#[inline(never)]
-fn near(a: &Column, b: &Column) -> bool {
-    let d0 = a.first - b.first;
-    let d1 = d0 + a.rows as i32 - b.rows as i32;
-    let (d0, d1) = (d0 + 1, d1 + 1); // within 0..=2 when near
-    let both = ((a.rows | b.rows) != 0) & (a.rows != 0) & (b.rows != 0);
-    both & ((d0 | d1 | (2 - d0) | (2 - d1)) >> 31 == 0)
 }
 
 /// The unwrapped columns `c0..=c1` of image `s` (none: an empty range).
@@ -760,13 +772,205 @@ pub fn align(old: &mut Shape, new: &Shape) {
     }
 }
 
+/// Records a pair's walk holds: a small move gives a few runs a column where the images
+/// differ, a move that parts them one whole column a column (an image spans at most 130).
+/// A walk with more falls back to the host's walk, column by column ([`walk_runs`]). (24
+/// in the unit tests, so that their moves take both ways.)
+pub const MAX_RECS: usize = if cfg!(test) { 24 } else { 320 };
+
+/// What a walk found in one map column: a run of rows whose counters differ
+/// ([`REC_RUN`]: `row` the first, unwrapped, `rows` of them; `up` the counters the new image
+/// adds there, `down` those the old one drops), or a column only one image has
+/// ([`REC_NEW`], [`REC_OLD`]: `row` its index in that image's columns).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
+pub struct Rec {
+    /// The kind in bits 0-7, the map column in bits 8-14.
+    kind_col: u32,
+    row: i32,
+    rows: u32,
+    up: u32,
+    down: u32,
+}
+
+/// [`Rec`] kind: a run of rows where the images differ.
+const REC_RUN: u32 = 0;
+/// [`Rec`] kind: a column only the new image has.
+const REC_NEW: u32 = 1;
+/// [`Rec`] kind: a column only the old image has.
+const REC_OLD: u32 = 2;
+
+const _: () = assert!(core::mem::size_of::<Rec>() == 20);
+
+/// Walks every map column of two images' columns (`cols[0]` the old image's, range `oc`;
+/// `cols[1]` the new one's, range `nc`), writing what differs into `recs`: the number of
+/// records, or `MAX_RECS + 1` when they did not fit. Columns the same in both give
+/// nothing; a column both have gives the runs of rows where their counters differ (the
+/// breakpoints of both merged); a column one has gives it whole. On the 68020 it is
+/// `__cspace_walk` in the runtime's assembly (the compiled walk spent some 2,000 cycles on
+/// a column whose runs differ); on the host the cursors below, which the system tests
+/// compare it with through the map.
+#[inline(never)]
+fn walk(w: &mut PairWork, oc: (i32, i32), nc: (i32, i32)) -> usize {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __cspace_walk(
+                old: *const Column,
+                oc0: i32,
+                oc1: i32,
+                new: *const Column,
+                nc0: i32,
+                nc1: i32,
+                out: *mut Rec,
+                cap: u32,
+            ) -> u32;
+        }
+        // SAFETY: `cols` holds the columns of both ranges (written by `all_columns`; an
+        // empty range is never read); at most `MAX_RECS` records are written.
+        unsafe {
+            __cspace_walk(
+                w.cols[0].as_ptr().cast(),
+                oc.0,
+                oc.1,
+                w.cols[1].as_ptr().cast(),
+                nc.0,
+                nc.1,
+                w.recs.as_mut_ptr().cast(),
+                MAX_RECS as u32,
+            ) as usize
+        }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        let mut n = 0;
+        let lo = oc.0.min(nc.0);
+        let hi = oc.1.max(nc.1);
+        for c in lo..hi + 1 {
+            let ok = if within(c, oc) {
+                Some(*column_at(&w.cols[0], oc, c))
+            } else {
+                None
+            };
+            let nk = if within(c, nc) {
+                Some(*column_at(&w.cols[1], nc, c))
+            } else {
+                None
+            };
+            match (ok, nk) {
+                (None, None) => {}
+                (Some(k), None) | (None, Some(k)) => {
+                    let (kind, range) = if nk.is_some() {
+                        (REC_NEW, nc)
+                    } else {
+                        (REC_OLD, oc)
+                    };
+                    if n >= MAX_RECS {
+                        return MAX_RECS + 1;
+                    }
+                    w.recs[n].write(Rec {
+                        kind_col: kind | k.col << 8,
+                        row: c - range.0,
+                        rows: 0,
+                        up: 0,
+                        down: 0,
+                    });
+                    n += 1;
+                }
+                (Some(o), Some(k)) => {
+                    if !differ(&o, &k) {
+                        continue;
+                    }
+                    if !near(&o, &k) {
+                        if n + 2 > MAX_RECS {
+                            return MAX_RECS + 1;
+                        }
+                        for (kind, at) in [(REC_NEW, c - nc.0), (REC_OLD, c - oc.0)] {
+                            w.recs[n].write(Rec {
+                                kind_col: kind | k.col << 8,
+                                row: at,
+                                rows: 0,
+                                up: 0,
+                                down: 0,
+                            });
+                            n += 1;
+                        }
+                        continue;
+                    }
+                    let PairWork { recs, cur, buf, .. } = &mut *w;
+                    let mut full = false;
+                    walk_runs(&o, &k, cur, buf, &mut |r, rows, up, down| {
+                        if n >= MAX_RECS {
+                            full = true;
+                            return;
+                        }
+                        recs[n].write(Rec {
+                            kind_col: REC_RUN | k.col << 8,
+                            row: r,
+                            rows,
+                            up,
+                            down,
+                        });
+                        n += 1;
+                    });
+                    if full {
+                        return MAX_RECS + 1;
+                    }
+                }
+            }
+        }
+        n
+    }
+}
+
+/// How far (rows) a column's first or last row may move for the column to be updated by
+/// its difference; one that moved further is drawn and erased whole (fewer, longer runs).
+/// `WNEAR` in the runtime's `__cspace_walk`.
+pub const NEAR_ROWS: i32 = 1;
+
+/// Whether columns `o` and `k` (both there) are within [`NEAR_ROWS`] of each other at both
+/// ends.
+fn near(o: &Column, k: &Column) -> bool {
+    let d0 = k.first - o.first;
+    let d1 = d0 + k.rows as i32 - o.rows as i32;
+    d0.abs() <= NEAR_ROWS && d1.abs() <= NEAR_ROWS
+}
+
+/// The runs of rows where columns `o` (old) and `k` (new) of one map column differ, as
+/// (first row unwrapped, rows, counters the new adds, counters the old drops), from the
+/// bottom up: the two columns' runs walked together by two cursors.
+fn walk_runs(
+    o: &Column,
+    k: &Column,
+    cur: &mut [Cursor; 2],
+    buf: &mut [u32; 10],
+    emit: &mut impl FnMut(i32, u32, u32, u32),
+) {
+    cur[0].set(o, buf);
+    cur[1].set(k, buf);
+    let mut r = -END;
+    loop {
+        let n = min_i(cur[0].ends[cur[0].p], cur[1].ends[cur[1].p]);
+        let (mo, mn) = (cur[0].masks[cur[0].p], cur[1].masks[cur[1].p]);
+        if (mo ^ mn) != 0 {
+            emit(r, (n - r) as u32, mn & !mo, mo & !mn);
+        }
+        if n >= END {
+            break;
+        }
+        r = n;
+        cur[0].advance(r);
+        cur[1].advance(r);
+    }
+}
+
 /// A link-2 image moved (`old` to `new`; either may be absent) as a differential update:
 /// every pixel counter the new image sets and the old one does not is incremented, every
 /// one the old sets and the new does not is decremented, the rest are left alone. After
 /// both halves the map is what drawing `new` and erasing `old` would leave, but a small
 /// move touches only the rows where the images' boundaries moved instead of every pixel of
 /// both images twice (the interiors of a 2-inch obstacle's images are thousands of pixels).
-/// Columns that moved far (or that only one image has) are drawn and erased whole.
+/// Columns only one image has are drawn or erased whole.
 ///
 /// With `log`, this is the first half: the increments go to the canvas and the decrements
 /// to the log, for [`RunLog::erase`] once every first half of the job is done (new before
@@ -792,6 +996,72 @@ pub fn pair<C: Canvas>(
     if let Some(s) = new {
         all_columns(s, nc.0, nc.1, &mut w.cols[1]);
     }
+    let n = walk(w, oc, nc);
+    if n > MAX_RECS {
+        // Too many records: the columns one by one, each walked and applied at once.
+        return pair_slow(oc, nc, canvas, log, w);
+    }
+    let mut one = [0u32; 10];
+    let mut i = 0;
+    while i < n {
+        // SAFETY: `walk` wrote the first `n` records.
+        let r = unsafe { w.recs[i].assume_init() };
+        i += 1;
+        let col = r.kind_col >> 8 & WRAP;
+        let kind = r.kind_col & 0xFF;
+        if kind == REC_RUN {
+            one[0] = r.rows;
+            if let Some(l) = log.as_deref_mut() {
+                if r.up != 0 {
+                    one[1] = r.up;
+                    f.merge(canvas.column(col, r.row as u32, &one, Op::Draw));
+                }
+                if r.down != 0 && ok {
+                    ok = l.push(col, r.row, r.rows, r.down);
+                }
+            } else if r.down != 0 {
+                one[1] = r.down;
+                f.merge(canvas.column(col, r.row as u32, &one, Op::Erase));
+            }
+        } else if kind == REC_NEW {
+            if log.is_some() {
+                // SAFETY: the walk's index is within the new image's columns.
+                let k = unsafe { w.cols[1][r.row as usize].assume_init_ref() };
+                f.merge(paint(canvas, k, Op::Draw, &mut w.buf));
+            }
+        } else {
+            // SAFETY: the walk's index is within the old image's columns.
+            let k = unsafe { w.cols[0][r.row as usize].assume_init_ref() };
+            if let Some(l) = log.as_deref_mut() {
+                if ok {
+                    ok = l.push_column(k);
+                }
+            } else {
+                f.merge(paint(canvas, k, Op::Erase, &mut w.buf));
+            }
+        }
+    }
+    if !ok {
+        if let Some(l) = log {
+            l.truncate(start);
+        }
+    }
+    (f, ok)
+}
+
+/// [`pair`] column by column when its records did not fit: each column walked by the
+/// cursors and applied at once.
+#[inline(never)]
+fn pair_slow<C: Canvas>(
+    oc: (i32, i32),
+    nc: (i32, i32),
+    canvas: &mut C,
+    mut log: Option<&mut RunLog>,
+    w: &mut PairWork,
+) -> (Flags, bool) {
+    let mut f = Flags::default();
+    let mut ok = true;
+    let start = log.as_deref().map_or(0, RunLog::len);
     let lo = min_i(oc.0, nc.0);
     let hi = -min_i(-oc.1, -nc.1);
     let mut one = [0u32; 10];
@@ -802,56 +1072,41 @@ pub fn pair<C: Canvas>(
     while i < count {
         let c = lo + i;
         i += 1;
-        let ocol = column_at(&w.cols[0], oc, c);
-        let ncol = column_at(&w.cols[1], nc, c);
-        // The same column in both images (most of them, after a small move): nothing.
+        let PairWork { cols, cur, buf, .. } = &mut *w;
+        let ocol = column_at(&cols[0], oc, c);
+        let ncol = column_at(&cols[1], nc, c);
         if !differ(ocol, ncol) {
             continue;
         }
-        if !near(ocol, ncol) {
+        if ocol.rows == 0 || ncol.rows == 0 || !near(ocol, ncol) {
             if let Some(l) = log.as_deref_mut() {
                 if ncol.rows != 0 {
-                    f.merge(paint(canvas, ncol, Op::Draw, &mut w.buf));
+                    f.merge(paint(canvas, ncol, Op::Draw, buf));
                 }
                 if ocol.rows != 0 && ok {
                     ok = l.push_column(ocol);
                 }
             } else if ocol.rows != 0 {
-                f.merge(paint(canvas, ocol, Op::Erase, &mut w.buf));
+                f.merge(paint(canvas, ocol, Op::Erase, buf));
             }
             continue;
         }
-        w.cur[0].set(ocol, &mut w.buf);
-        w.cur[1].set(ncol, &mut w.buf);
         let col = ncol.col;
-        let mut r = -END;
-        loop {
-            let n = min_i(w.cur[0].ends[w.cur[0].p], w.cur[1].ends[w.cur[1].p]);
-            let (mo, mn) = (w.cur[0].masks[w.cur[0].p], w.cur[1].masks[w.cur[1].p]);
-            let rows = (n - r) as u32;
+        walk_runs(ocol, ncol, cur, buf, &mut |r, rows, up, down| {
             one[0] = rows;
             if let Some(l) = log.as_deref_mut() {
-                one[1] = mn & !mo;
-                if one[1] != 0 {
+                if up != 0 {
+                    one[1] = up;
                     f.merge(canvas.column(col, r as u32, &one, Op::Draw));
                 }
-                let down = mo & !mn;
                 if down != 0 && ok {
                     ok = l.push(col, r, rows, down);
                 }
-            } else {
-                one[1] = mo & !mn;
-                if one[1] != 0 {
-                    f.merge(canvas.column(col, r as u32, &one, Op::Erase));
-                }
+            } else if down != 0 {
+                one[1] = down;
+                f.merge(canvas.column(col, r as u32, &one, Op::Erase));
             }
-            if n >= END {
-                break;
-            }
-            r = n;
-            w.cur[0].advance(r);
-            w.cur[1].advance(r);
-        }
+        });
     }
     if !ok {
         if let Some(l) = log {

@@ -158,7 +158,7 @@ pub fn drawn_sweep_mm(g: &mut (impl GlobalBus + ?Sized), i: u32) -> (i32, i32) {
     unpack_sweep(g.read_u32(work_entry(i) + 4 * SWEEP_WORD))
 }
 
-/// A job's working memory, kept by the board between jobs (31 KiB: not on the stack, and
+/// A job's working memory, kept by the board between jobs (33 KiB: not on the stack, and
 /// the 68k backend mis-indexes arrays on a function's own frame, llvm/llvm-project#200984).
 pub struct Scratch {
     /// The decrements of the job's first half ([`raster::pair`]).
@@ -190,9 +190,30 @@ impl Scratch {
             logged: [false; 2 * MAX_COVER],
         }
     }
-    /// Runs the last job's second half took from the log (for the bench).
-    pub fn logged_runs(&self) -> usize {
-        self.log.len()
+    /// Initialises `slot` in place and returns it: every field a job reads before it writes
+    /// it, and not the large work areas ([`RunLog`], [`PairWork`]'s columns and records),
+    /// which stay as they were. For a board's memory outside `.bss` (the image's `.uninit`
+    /// section: zeroing or copying 33 KiB at power-up delayed its first heartbeat).
+    pub fn init(slot: &mut core::mem::MaybeUninit<Scratch>) -> &mut Scratch {
+        use core::ptr::addr_of_mut;
+        const NO: Images = Images {
+            stripe: None,
+            front: None,
+            rear: None,
+        };
+        let p = slot.as_mut_ptr();
+        // SAFETY: every field that is not (made of) `MaybeUninit` is written here before
+        // the reference is made: the log's and the pair work's own fields, the images, the
+        // stripes and the flags.
+        unsafe {
+            RunLog::init(addr_of_mut!((*p).log));
+            PairWork::init(addr_of_mut!((*p).pair));
+            addr_of_mut!((*p).new).write(NO);
+            addr_of_mut!((*p).old).write(NO);
+            addr_of_mut!((*p).old_stripes).write([None; MAX_COVER]);
+            addr_of_mut!((*p).logged).write([false; 2 * MAX_COVER]);
+            slot.assume_init_mut()
+        }
     }
 }
 

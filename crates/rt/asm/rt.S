@@ -1389,3 +1389,272 @@ __cspace_columns:
     ble.s   3b
     move.l  %d1, %d0
     rts
+
+/* ---- C-space pair walk (crates/cspace's raster::walk; thesis ch. IV section 6) ----
+ * u32 __cspace_walk(const Column *old, i32 oc0, i32 oc1, const Column *new, i32 nc0,
+ *                   i32 nc1, Rec *out, u32 cap):
+ * walks map columns min(oc0, nc0)..=max(oc1, nc1) of an old and a new image (their
+ * raster::Column records from oc0 and nc0; an empty range has oc0 > oc1) and writes a
+ * raster::Rec (five longs: kind | column << 8, row, rows, up, down) for each thing that
+ * differs: a column only the new image has (kind 1, row = its index), only the old one
+ * (kind 2), and, in a column both have and that is not the same, each run of rows between
+ * the two columns' merged breakpoints whose counters differ (kind 0: row unwrapped, rows,
+ * the counters the new adds, those the old drops). Returns the records written, or cap + 1
+ * when they do not fit. The same records as the host's walk by cursors, which the system
+ * tests compare it with through the map. */
+    .section .text.__cspace_walk, "ax"
+    .globl __cspace_walk
+    .set    WC, -4              /* column */
+    .set    WHI, -8             /* last column */
+    .set    WBP, -40            /* eight breakpoints */
+    .set    WNEAR, 1            /* raster::NEAR_ROWS */
+__cspace_walk:
+    link    %a6, #-40
+    movem.l %d2-%d7/%a2-%a5, -(%sp)
+    move.l  32(%a6), %a3        /* next record */
+    moveq   #0, %d7             /* records */
+    move.l  12(%a6), %d0        /* lo = min(oc0, nc0) */
+    cmp.l   24(%a6), %d0
+    ble.s   1f
+    move.l  24(%a6), %d0
+1:  move.l  %d0, WC(%a6)
+    move.l  16(%a6), %d0        /* hi = max(oc1, nc1) */
+    cmp.l   28(%a6), %d0
+    bge.s   1f
+    move.l  28(%a6), %d0
+1:  move.l  %d0, WHI(%a6)
+.Lwcol:
+    move.l  WC(%a6), %d0
+    cmp.l   WHI(%a6), %d0
+    bgt     .Lwdone
+    /* a0: the old image's column (0: none), a1: the new one's */
+    sub.l   %a0, %a0
+    move.l  %d0, %d1
+    sub.l   12(%a6), %d1
+    bmi.s   1f
+    cmp.l   16(%a6), %d0
+    bgt.s   1f
+    lsl.l   #5, %d1
+    move.l  8(%a6), %a0
+    add.l   %d1, %a0
+1:  sub.l   %a1, %a1
+    move.l  %d0, %d1
+    sub.l   24(%a6), %d1
+    bmi.s   1f
+    cmp.l   28(%a6), %d0
+    bgt.s   1f
+    lsl.l   #5, %d1
+    move.l  20(%a6), %a1
+    add.l   %d1, %a1
+1:  move.l  %a1, %d1
+    tst.l   %d1
+    bne.s   2f
+    move.l  %a0, %d1            /* the old image's alone, or neither */
+    tst.l   %d1
+    beq     .Lwnext
+    move.l  WC(%a6), %d1
+    sub.l   12(%a6), %d1
+    moveq   #2, %d2
+    move.l  %a0, %a4
+    bra.s   3f
+2:  move.l  %a0, %d1
+    tst.l   %d1
+    bne.s   4f
+    move.l  WC(%a6), %d1        /* the new image's alone */
+    sub.l   24(%a6), %d1
+    moveq   #1, %d2
+    move.l  %a1, %a4
+3:  cmp.l   36(%a6), %d7
+    bcc     .Lwfull
+    move.l  (%a4), %d3
+    lsl.l   #8, %d3
+    or.l    %d2, %d3
+    move.l  %d3, (%a3)+
+    move.l  %d1, (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    addq.l  #1, %d7
+    bra     .Lwnext
+4:  /* both: nothing when the columns are the same */
+    move.l  %a0, %a2
+    move.l  %a1, %a5
+    moveq   #7, %d1
+5:  cmpm.l  (%a2)+, (%a5)+
+    dbne    %d1, 5b
+    beq     .Lwnext
+    /* columns whose first or last rows moved by more than WNEAR rows: redrawn whole
+     * (fewer, longer runs than their difference) */
+    move.l  4(%a1), %d0
+    sub.l   4(%a0), %d0         /* first: new - old */
+    move.l  %d0, %d1
+    add.l   8(%a1), %d1
+    sub.l   8(%a0), %d1         /* last: new - old */
+    addq.l  #WNEAR, %d0
+    moveq   #2 * WNEAR, %d2
+    cmp.l   %d2, %d0
+    bhi.s   11f                 /* unsigned: outside 0..=2 WNEAR */
+    addq.l  #WNEAR, %d1
+    cmp.l   %d2, %d1
+    bls.s   12f
+11: cmp.l   36(%a6), %d7        /* the new column whole, then the old one */
+    bcc     .Lwfull
+    move.l  (%a1), %d3
+    lsl.l   #8, %d3
+    addq.l  #1, %d3
+    move.l  %d3, (%a3)+
+    move.l  WC(%a6), %d3
+    sub.l   24(%a6), %d3
+    move.l  %d3, (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    addq.l  #1, %d7
+    cmp.l   36(%a6), %d7
+    bcc     .Lwfull
+    move.l  (%a0), %d3
+    lsl.l   #8, %d3
+    addq.l  #2, %d3
+    move.l  %d3, (%a3)+
+    move.l  WC(%a6), %d3
+    sub.l   12(%a6), %d3
+    move.l  %d3, (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    addq.l  #1, %d7
+    bra     .Lwnext
+12:
+    /* the breakpoints of both: first, first + min(lower_rows, rows),
+     * first + min(upper_from, rows), first + rows */
+    lea     WBP(%a6), %a2
+    move.l  %a0, %a4
+    bsr     .Lwbreaks
+    move.l  %a1, %a4
+    bsr     .Lwbreaks
+    /* insertion sort of the eight */
+    lea     WBP(%a6), %a2
+    moveq   #1, %d4             /* i */
+6:  move.l  (%a2,%d4.l*4), %d0  /* key */
+    move.l  %d4, %d5            /* j */
+7:  tst.l   %d5
+    beq.s   8f
+    move.l  -4(%a2,%d5.l*4), %d1
+    cmp.l   %d0, %d1
+    ble.s   8f
+    move.l  %d1, (%a2,%d5.l*4)
+    subq.l  #1, %d5
+    bra.s   7b
+8:  move.l  %d0, (%a2,%d5.l*4)
+    addq.l  #1, %d4
+    moveq   #8, %d1
+    cmp.l   %d1, %d4
+    blt.s   6b
+    /* each interval [bp[i], bp[i + 1]) with its counters in both; a5: where this
+     * column's last run ended (none yet: not a row) */
+    move.l  #0x80000000, %a5
+    moveq   #0, %d4
+9:  move.l  (%a2,%d4.l*4), %d0  /* p */
+    move.l  4(%a2,%d4.l*4), %d6 /* q */
+    cmp.l   %d0, %d6
+    ble.s   10f
+    move.l  %a0, %a4
+    bsr     .Lwmask
+    move.l  %d1, %d5            /* old */
+    move.l  %a1, %a4
+    bsr     .Lwmask             /* d1: new */
+    cmp.l   %d1, %d5
+    beq.s   10f
+    move.l  %d5, %d2
+    not.l   %d2
+    and.l   %d1, %d2            /* up: new and not old */
+    not.l   %d1
+    and.l   %d5, %d1            /* down: old and not new */
+    /* right after the last run, with the same counters: that run made longer */
+    cmp.l   %a5, %d0
+    bne.s   13f
+    cmp.l   -8(%a3), %d2
+    bne.s   13f
+    cmp.l   -4(%a3), %d1
+    bne.s   13f
+    move.l  %d6, %d3
+    sub.l   %d0, %d3
+    add.l   %d3, -12(%a3)
+    move.l  %d6, %a5
+    bra.s   10f
+13: cmp.l   36(%a6), %d7
+    bcc     .Lwfull
+    move.l  (%a0), %d3
+    lsl.l   #8, %d3             /* kind 0 */
+    move.l  %d3, (%a3)+
+    move.l  %d0, (%a3)+
+    move.l  %d6, %d3
+    sub.l   %d0, %d3
+    move.l  %d3, (%a3)+
+    move.l  %d2, (%a3)+
+    move.l  %d1, (%a3)+
+    addq.l  #1, %d7
+    move.l  %d6, %a5
+10: addq.l  #1, %d4
+    moveq   #7, %d1
+    cmp.l   %d1, %d4
+    blt.s   9b
+.Lwnext:
+    addq.l  #1, WC(%a6)
+    bra     .Lwcol
+.Lwfull:
+    move.l  36(%a6), %d7
+    addq.l  #1, %d7
+.Lwdone:
+    move.l  %d7, %d0
+    movem.l (%sp)+, %d2-%d7/%a2-%a5
+    unlk    %a6
+    rts
+/* The four breakpoints of column a4 to (a2)+. Uses d0-d2. */
+.Lwbreaks:
+    move.l  4(%a4), %d0         /* first */
+    move.l  8(%a4), %d1         /* rows */
+    move.l  %d0, (%a2)+
+    move.l  12(%a4), %d2
+    cmp.l   %d1, %d2
+    bls.s   1f
+    move.l  %d1, %d2
+1:  add.l   %d0, %d2
+    move.l  %d2, (%a2)+
+    move.l  16(%a4), %d2
+    cmp.l   %d1, %d2
+    bls.s   1f
+    move.l  %d1, %d2
+1:  add.l   %d0, %d2
+    move.l  %d2, (%a2)+
+    add.l   %d1, %d0
+    move.l  %d0, (%a2)+
+    rts
+/* The counters column a4 gives row d0 (raster::pieces's runs): 0 outside the column, all
+ * four in a full one; else its end counters, plus the lower chain's below lower_rows, the
+ * upper chain's from upper_from, or all four between. In d1; uses d2, d3. */
+.Lwmask:
+    move.l  %d0, %d2
+    sub.l   4(%a4), %d2         /* rel */
+    bmi.s   4f
+    cmp.l   8(%a4), %d2
+    bcc.s   4f                  /* rel >= rows */
+    moveq   #127, %d1
+    cmp.l   8(%a4), %d1
+    bcs.s   3f                  /* rows >= 128: all four */
+    move.l  28(%a4), %d1
+    moveq   #0, %d3
+    cmp.l   12(%a4), %d2
+    bcc.s   1f
+    or.l    20(%a4), %d1        /* rel < lower_rows */
+    moveq   #1, %d3
+1:  cmp.l   16(%a4), %d2
+    bcs.s   2f
+    or.l    24(%a4), %d1        /* rel >= upper_from */
+    moveq   #1, %d3
+2:  tst.l   %d3
+    bne.s   5f
+3:  move.l  #0x01010101, %d1
+5:  rts
+4:  moveq   #0, %d1
+    rts
