@@ -153,6 +153,69 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
     }
 }
 
+/// The cspace image's differential move (its column extents and pair walk in assembly,
+/// through the probe `cspace_probe_move`) leaves the counters the host's draw-then-erase
+/// leaves, bit for bit: for random disks moved a little (0-3 mm, the moves the boards redraw
+/// most), further (0-40 mm) or anywhere, with new radii.
+#[test]
+fn the_cspace_image_moves_images_like_draw_then_erase() {
+    use sim_host::emu::EmuBoard;
+    use sim_host::image::Image;
+    use vme_map::layout::{CSPACE_MAP, CSPACE_STRIPES};
+    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let id = BoardId::Cspace0;
+    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let probe = img.symbol("cspace_probe_move").unwrap();
+    let word = |m: &[u8], o: usize| u32::from_be_bytes([m[o], m[o + 1], m[o + 2], m[o + 3]]);
+    let mut moved = 0;
+    for n in 0..150 {
+        let old = random_disk(91, n);
+        let far = random_disk(92, n);
+        let step = [3_000, 40_000, 0][n as usize % 3];
+        let new = if step == 0 {
+            far
+        } else {
+            // A move of up to `step` um each way (from the other random disk's digits).
+            cspace::Disk {
+                x_um: old.x_um + far.x_um % step,
+                y_um: old.y_um + far.y_um % step,
+                r_um: old.r_um + (far.r_um % 2_000).abs(),
+            }
+        };
+        let (Ok(a), Ok(c)) = (cspace::images(&old), cspace::images(&new)) else {
+            continue;
+        };
+        global.iter_mut().for_each(|x| *x = 0);
+        let args = [old.x_um, old.y_um, old.r_um, new.x_um, new.y_um, new.r_um].map(|v| v as u32);
+        let (ret, _) = b
+            .call(&mut global, probe, &args, 200_000_000)
+            .expect("probe returns");
+        assert_eq!(ret, 0, "{old:?} -> {new:?}");
+        let mut host = cspace::Memory::default();
+        cspace::apply(&a, &mut host.canvas(), cspace::Op::Draw);
+        cspace::apply(&c, &mut host.canvas(), cspace::Op::Draw);
+        cspace::apply(&a, &mut host.canvas(), cspace::Op::Erase);
+        for i in 0..128 * 128 {
+            assert_eq!(
+                word(&global, CSPACE_MAP as usize + 4 * i),
+                host.map[i],
+                "{old:?} -> {new:?}, pixel {i}"
+            );
+        }
+        for i in 0..128 {
+            assert_eq!(
+                word(&global, CSPACE_STRIPES as usize + 4 * i),
+                host.stripes[i],
+                "{old:?} -> {new:?}, stripe {i}"
+            );
+        }
+        moved += 1;
+    }
+    assert!(moved > 100, "only {moved} moves had images");
+}
+
 /// The object table caught mid-publish is skipped, not a fault; a table left torn (a writer
 /// that died mid-write) is recorded as TornRecord once it has stayed torn for
 /// `TORN_PASSES` passes.

@@ -99,3 +99,40 @@ pub extern "C" fn cspace_probe_draw(x_um: i32, y_um: i32, r_um: i32) -> i32 {
     cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
     0
 }
+
+/// Test probe (never called by the board): draws the images of disk (`x0`, `y0`, `r0`) into
+/// the map and stripe layer in global RAM, then moves them to disk (`x1`, `y1`, `r1`) as a
+/// job does (`cspace::worklist::move_disk`: the differential update with this image's
+/// assembly). Returns 0, or -1 when a disk has no images.
+#[no_mangle]
+#[link_section = ".text.probe.cspace_move"]
+pub extern "C" fn cspace_probe_move(x0: i32, y0: i32, r0: i32, x1: i32, y1: i32, r1: i32) -> i32 {
+    #[link_section = ".uninit.cspace_probe_scratch"]
+    static mut PROBE_SCRATCH: MaybeUninit<Scratch> = MaybeUninit::uninit();
+    let old = cspace::Disk {
+        x_um: x0,
+        y_um: y0,
+        r_um: r0,
+    };
+    let new = cspace::Disk {
+        x_um: x1,
+        y_um: y1,
+        r_um: r1,
+    };
+    let Ok(im) = cspace::images(&old) else {
+        return -1;
+    };
+    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the probe
+    // is the only code that names PROBE_SCRATCH.
+    let (mut g, sc) = unsafe {
+        (
+            MmioGlobal::new(),
+            Scratch::init(&mut *core::ptr::addr_of_mut!(PROBE_SCRATCH)),
+        )
+    };
+    cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
+    match cspace::worklist::move_disk(&mut g, &old, &new, sc) {
+        Ok((_, None)) => 0,
+        _ => -1,
+    }
+}

@@ -233,6 +233,18 @@ fn images_of(disks: &([Disk; MAX_COVER], usize), i: usize, out: &mut Images) {
     }
 }
 
+/// Moves the images of disk `old` (drawn) to those of disk `new` in global RAM as a job
+/// does ([`update`] with one cover disk each): the probe the system tests run on the image
+/// against the host's draw-then-erase.
+pub fn move_disk<B: GlobalBus + ?Sized>(
+    g: &mut B,
+    old: &Disk,
+    new: &Disk,
+    sc: &mut Scratch,
+) -> Result<(Flags, Option<Error>), Error> {
+    update(g, &([*new; MAX_COVER], 1), &([*old; MAX_COVER], 1), sc)
+}
+
 /// Moves an obstacle's images from the cover disks `old` to `new` (thesis lines 1199-1210:
 /// new before old). Cover disk `i` of the new position is paired with disk `i` of the old
 /// (the same part of the obstacle, moved a little), and each pair's link-2 images are
