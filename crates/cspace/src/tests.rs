@@ -310,3 +310,44 @@ proptest! {
         prop_assert!(h.map == want.map, "the maps differ");
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Jobs on the work list by two boards (one doing most, the other now and then), small
+    /// moves and jumps: after every job the map holds exactly the image of the entry's
+    /// recorded position (the differential moves leave nothing of the old images).
+    #[test]
+    fn jobs_leave_the_image_of_the_recorded_position(
+        start in (-450_000i32..450_000, -450_000i32..450_000),
+        moves in prop::collection::vec((-4_000i32..4_000, -4_000i32..4_000, 0u8..8), 1..16),
+    ) {
+        use vme_map::records::{beacon_flags, ObjectTable};
+        let mut global = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
+        let mut boards = [Box::new(worklist::Scratch::new()), Box::new(worklist::Scratch::new())];
+        let (mut x, mut y) = start;
+        for (k, &(dx, dy, how)) in moves.iter().enumerate() {
+            // Mostly small moves; now and then a jump across the map.
+            (x, y) = if how == 0 { (-y, x) } else { (x + dx, y + dy) };
+            let mut t = ObjectTable { frame: k as u32 + 1, ..Default::default() };
+            let b = &mut t.beacons[worklist::OBSTACLE_BEACONS[0] as usize];
+            (b.x_um, b.y_um, b.t_us, b.flags) = (x, y, 1_000 * (k as u32 + 1), beacon_flags::VALID);
+            // One round of the cursor (six entries); board 1 takes it now and then.
+            let board = usize::from(how == 1);
+            for _ in 0..worklist::OBSTACLE_BEACONS.len() {
+                let mut g = vme_map::ArrayBus::new(&mut global);
+                let out = worklist::step(&mut g, 1 + board as u32, &t, &mut boards[board]);
+                prop_assert_eq!(out.flags, Flags::default());
+                prop_assert!(out.error.is_none());
+            }
+            let e = worklist::entry(&mut vme_map::ArrayBus::new(&mut global), 0);
+            let mut want = Memory::default();
+            if let Ok(im) = images(&Disk { x_um: e.x_um, y_um: e.y_um, r_um: e.r_um }) {
+                apply(&im, &mut want.canvas(), Op::Draw);
+            }
+            let (map, stripes) = bus_map(&mut global);
+            prop_assert!(map == want.map.to_vec(), "map after move {}", k);
+            prop_assert!(stripes == want.stripes.to_vec(), "stripes after move {}", k);
+        }
+    }
+}
