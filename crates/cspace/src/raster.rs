@@ -9,6 +9,11 @@
 //! the chain rises or falls), rows touched by the lower chain -theta2 (and +theta1 or
 //! -theta1), an image's first and last columns -theta1 and +theta1; rows inside count all
 //! four directions.
+//!
+//! A moved image is updated by its difference from the old one ([`pair`]: new before old,
+//! lines 1199-1210, the decrements kept in a [`RunLog`] until every increment is done); the
+//! columns' extents and the walk over two images' columns are the runtime's assembly on
+//! the 68020 (`__cspace_columns`, `__cspace_walk`) and the Rust here on the host.
 
 use crate::counters::{self, Flags, ALL, M1, M2, P1, P2};
 use crate::{Shape, Stripe, UNITS_PER_PIXEL};
@@ -504,7 +509,7 @@ fn nibble(mask: u32) -> u32 {
     (mask >> 21 & 8) | (mask >> 14 & 4) | (mask >> 7 & 2) | (mask & 1)
 }
 
-/// The counters of a [`nibble`].
+/// The counters of a `nibble`.
 #[inline(always)]
 fn unnibble(n: u32) -> u32 {
     (n & 8) << 21 | (n & 4) << 14 | (n & 2) << 7 | (n & 1)
@@ -513,7 +518,7 @@ fn unnibble(n: u32) -> u32 {
 /// The decrements of a differential update ([`pair`]), kept from its first half, which
 /// computes both images' columns, for its second. A run of rows is one word: the column in
 /// bits 24-30, the first row (wrapped) in bits 16-22, the rows (1-128) in bits 8-15 and the
-/// counters as a [`nibble`] in bits 0-3. A whole column to erase is three words: [`WHOLE`]
+/// counters as a `nibble` in bits 0-3. A whole column to erase is three words: `WHOLE`
 /// with the column in bits 24-30, its rows, lower-chain rows and first upper-chain row in
 /// bits 16-23, 8-15 and 0-7; its first row; and its lower-chain, upper-chain and end
 /// counters as nibbles in bits 0-3, 4-7 and 8-11.
@@ -774,14 +779,14 @@ pub fn align(old: &mut Shape, new: &Shape) {
 
 /// Records a pair's walk holds: a small move gives a few runs a column where the images
 /// differ, a move that parts them one whole column a column (an image spans at most 130).
-/// A walk with more falls back to the host's walk, column by column ([`walk_runs`]). (24
+/// A walk with more falls back to the host's walk, column by column (`walk_runs`). (24
 /// in the unit tests, so that their moves take both ways.)
 pub const MAX_RECS: usize = if cfg!(test) { 24 } else { 320 };
 
 /// What a walk found in one map column: a run of rows whose counters differ
-/// ([`REC_RUN`]: `row` the first, unwrapped, `rows` of them; `up` the counters the new image
+/// (`REC_RUN`: `row` the first, unwrapped, `rows` of them; `up` the counters the new image
 /// adds there, `down` those the old one drops), or a column only one image has
-/// ([`REC_NEW`], [`REC_OLD`]: `row` its index in that image's columns).
+/// (`REC_NEW`, `REC_OLD`: `row` its index in that image's columns).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C)]
 pub struct Rec {

@@ -1,8 +1,9 @@
 //! The shared work list (thesis line ~1225, proposed there and built here): a circular list
 //! of the moving obstacles with the position each one's image was last drawn at, and a
 //! cursor the C-space boards advance with `CAS.L`. A board takes the next entry, claims it
-//! with `CAS.L`, and if the obstacle moved draws its new image and erases the old one, then
-//! records the new position and releases the entry. So N boards share the transforms evenly
+//! with `CAS.L`, and if the obstacle moved draws its new image and erases the old one (by
+//! their difference, [`crate::raster::pair`]: every increment first), then records the new
+//! position and releases the entry. So N boards share the transforms evenly
 //! whatever moves, and a board that stops only slows the map down.
 //!
 //! Moving obstacles (those the sensing board flags moving) are drawn swept ("blurred", lines
@@ -234,7 +235,7 @@ fn images_of(disks: &([Disk; MAX_COVER], usize), i: usize, out: &mut Images) {
 }
 
 /// Moves the images of disk `old` (drawn) to those of disk `new` in global RAM as a job
-/// does ([`update`] with one cover disk each): the probe the system tests run on the image
+/// does (`update` with one cover disk each): the probe the system tests run on the image
 /// against the host's draw-then-erase.
 pub fn move_disk<B: GlobalBus + ?Sized>(
     g: &mut B,
