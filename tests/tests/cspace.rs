@@ -82,6 +82,21 @@ fn the_cspace_image_draws_what_the_host_draws() {
     sim_host::cspace_bench::image_vs_host(&system_tests::images_dir(), &tables).unwrap();
 }
 
+/// Requires the map and stripe layer in `global` (global RAM) to be `host`'s, word for word.
+fn assert_map_is(global: &[u8], host: &cspace::Memory, what: &str) {
+    use vme_map::layout::{CSPACE_MAP, CSPACE_STRIPES};
+    let word = |o: u32| {
+        let o = o as usize;
+        u32::from_be_bytes([global[o], global[o + 1], global[o + 2], global[o + 3]])
+    };
+    for (i, &w) in host.map.iter().enumerate() {
+        assert_eq!(word(CSPACE_MAP + 4 * i as u32), w, "{what}, pixel {i}");
+    }
+    for (i, &w) in host.stripes.iter().enumerate() {
+        assert_eq!(word(CSPACE_STRIPES + 4 * i as u32), w, "{what}, stripe {i}");
+    }
+}
+
 /// The cspace image's own `images` and raster (called through its test probes on the
 /// emulated CPU) against the host's, for random disks: the images' vertices, and the map and
 /// stripe layer they draw, bit for bit.
@@ -89,7 +104,6 @@ fn the_cspace_image_draws_what_the_host_draws() {
 fn the_cspace_image_transforms_and_rasterises_like_the_host() {
     use sim_host::emu::EmuBoard;
     use sim_host::image::Image;
-    use vme_map::layout::{CSPACE_MAP, CSPACE_STRIPES};
     use vme_map::{BoardId, GLOBAL_RAM_SIZE};
     let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
@@ -136,20 +150,7 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
             .expect("probe returns");
         let mut host = cspace::Memory::default();
         cspace::apply(&im, &mut host.canvas(), cspace::Op::Draw);
-        for i in 0..128 * 128 {
-            assert_eq!(
-                word(&global, CSPACE_MAP as usize + 4 * i),
-                host.map[i],
-                "{d:?}, pixel {i}"
-            );
-        }
-        for i in 0..128 {
-            assert_eq!(
-                word(&global, CSPACE_STRIPES as usize + 4 * i),
-                host.stripes[i],
-                "{d:?}, stripe {i}"
-            );
-        }
+        assert_map_is(&global, &host, &format!("{d:?}"));
     }
 }
 
@@ -161,14 +162,12 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
 fn the_cspace_image_moves_images_like_draw_then_erase() {
     use sim_host::emu::EmuBoard;
     use sim_host::image::Image;
-    use vme_map::layout::{CSPACE_MAP, CSPACE_STRIPES};
     use vme_map::{BoardId, GLOBAL_RAM_SIZE};
     let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
     let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
     let id = BoardId::Cspace0;
     let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
     let probe = img.symbol("cspace_probe_move").unwrap();
-    let word = |m: &[u8], o: usize| u32::from_be_bytes([m[o], m[o + 1], m[o + 2], m[o + 3]]);
     let mut moved = 0;
     for n in 0..150 {
         let old = random_disk(91, n);
@@ -197,20 +196,7 @@ fn the_cspace_image_moves_images_like_draw_then_erase() {
         cspace::apply(&a, &mut host.canvas(), cspace::Op::Draw);
         cspace::apply(&c, &mut host.canvas(), cspace::Op::Draw);
         cspace::apply(&a, &mut host.canvas(), cspace::Op::Erase);
-        for i in 0..128 * 128 {
-            assert_eq!(
-                word(&global, CSPACE_MAP as usize + 4 * i),
-                host.map[i],
-                "{old:?} -> {new:?}, pixel {i}"
-            );
-        }
-        for i in 0..128 {
-            assert_eq!(
-                word(&global, CSPACE_STRIPES as usize + 4 * i),
-                host.stripes[i],
-                "{old:?} -> {new:?}, stripe {i}"
-            );
-        }
+        assert_map_is(&global, &host, &format!("{old:?} -> {new:?}"));
         moved += 1;
     }
     assert!(moved > 100, "only {moved} moves had images");

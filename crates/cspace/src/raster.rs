@@ -969,6 +969,78 @@ fn walk_runs(
     }
 }
 
+/// Where a pair's differences go: with a log (the first half) the increments to the canvas
+/// and the decrements to the log; without one (the second half) the decrements to the
+/// canvas. `ok` turns false when the log fills up.
+struct Apply<'a, C: Canvas> {
+    canvas: &'a mut C,
+    log: Option<&'a mut RunLog>,
+    ok: bool,
+    f: Flags,
+    /// One run as a column's pieces (the other four empty).
+    one: [u32; 10],
+}
+
+impl<'a, C: Canvas> Apply<'a, C> {
+    fn new(canvas: &'a mut C, log: Option<&'a mut RunLog>) -> Self {
+        Self {
+            canvas,
+            log,
+            ok: true,
+            f: Flags::default(),
+            one: [0; 10],
+        }
+    }
+    /// `rows` rows of map column `col` from row `row` (unwrapped): `up` the counters the new
+    /// image adds there, `down` those the old one drops.
+    fn run(&mut self, col: u32, row: i32, rows: u32, up: u32, down: u32) {
+        self.one[0] = rows;
+        if let Some(l) = self.log.as_deref_mut() {
+            if up != 0 {
+                self.one[1] = up;
+                let fl = self.canvas.column(col, row as u32, &self.one, Op::Draw);
+                self.f.merge(fl);
+            }
+            if down != 0 && self.ok {
+                self.ok = l.push(col, row, rows, down);
+            }
+        } else if down != 0 {
+            self.one[1] = down;
+            let fl = self.canvas.column(col, row as u32, &self.one, Op::Erase);
+            self.f.merge(fl);
+        }
+    }
+    /// A column only the new image has (or redrawn whole): drawn in the first half.
+    fn new_column(&mut self, k: &Column, buf: &mut [u32; 10]) {
+        if self.log.is_some() {
+            let fl = paint(self.canvas, k, Op::Draw, buf);
+            self.f.merge(fl);
+        }
+    }
+    /// A column only the old image has (or erased whole): logged in the first half, erased
+    /// in the second.
+    fn old_column(&mut self, k: &Column, buf: &mut [u32; 10]) {
+        if let Some(l) = self.log.as_deref_mut() {
+            if self.ok {
+                self.ok = l.push_column(k);
+            }
+        } else {
+            let fl = paint(self.canvas, k, Op::Erase, buf);
+            self.f.merge(fl);
+        }
+    }
+    /// The flags and whether the log held everything; a pair whose words did not all fit
+    /// loses those it had from `start` on.
+    fn finish(self, start: usize) -> (Flags, bool) {
+        if !self.ok {
+            if let Some(l) = self.log {
+                l.truncate(start);
+            }
+        }
+        (self.f, self.ok)
+    }
+}
+
 /// A link-2 image moved (`old` to `new`; either may be absent) as a differential update:
 /// every pixel counter the new image sets and the old one does not is incremented, every
 /// one the old sets and the new does not is decremented, the rest are left alone. After
@@ -988,11 +1060,9 @@ pub fn pair<C: Canvas>(
     old: &Option<Shape>,
     new: &Option<Shape>,
     canvas: &mut C,
-    mut log: Option<&mut RunLog>,
+    log: Option<&mut RunLog>,
     w: &mut PairWork,
 ) -> (Flags, bool) {
-    let mut f = Flags::default();
-    let mut ok = true;
     let start = log.as_deref().map_or(0, RunLog::len);
     let (oc, nc) = (columns(old), columns(new));
     if let Some(s) = old {
@@ -1002,74 +1072,39 @@ pub fn pair<C: Canvas>(
         all_columns(s, nc.0, nc.1, &mut w.cols[1]);
     }
     let n = walk(w, oc, nc);
+    let mut a = Apply::new(canvas, log);
     if n > MAX_RECS {
         // Too many records: the columns one by one, each walked and applied at once.
-        return pair_slow(oc, nc, canvas, log, w);
+        pair_slow(oc, nc, &mut a, w);
+        return a.finish(start);
     }
-    let mut one = [0u32; 10];
     let mut i = 0;
     while i < n {
         // SAFETY: `walk` wrote the first `n` records.
         let r = unsafe { w.recs[i].assume_init() };
         i += 1;
-        let col = r.kind_col >> 8 & WRAP;
         let kind = r.kind_col & 0xFF;
         if kind == REC_RUN {
-            one[0] = r.rows;
-            if let Some(l) = log.as_deref_mut() {
-                if r.up != 0 {
-                    one[1] = r.up;
-                    f.merge(canvas.column(col, r.row as u32, &one, Op::Draw));
-                }
-                if r.down != 0 && ok {
-                    ok = l.push(col, r.row, r.rows, r.down);
-                }
-            } else if r.down != 0 {
-                one[1] = r.down;
-                f.merge(canvas.column(col, r.row as u32, &one, Op::Erase));
-            }
+            a.run(r.kind_col >> 8 & WRAP, r.row, r.rows, r.up, r.down);
         } else if kind == REC_NEW {
-            if log.is_some() {
-                // SAFETY: the walk's index is within the new image's columns.
-                let k = unsafe { w.cols[1][r.row as usize].assume_init_ref() };
-                f.merge(paint(canvas, k, Op::Draw, &mut w.buf));
-            }
+            // SAFETY: the walk's index is within the new image's columns.
+            let k = unsafe { w.cols[1][r.row as usize].assume_init_ref() };
+            a.new_column(k, &mut w.buf);
         } else {
             // SAFETY: the walk's index is within the old image's columns.
             let k = unsafe { w.cols[0][r.row as usize].assume_init_ref() };
-            if let Some(l) = log.as_deref_mut() {
-                if ok {
-                    ok = l.push_column(k);
-                }
-            } else {
-                f.merge(paint(canvas, k, Op::Erase, &mut w.buf));
-            }
+            a.old_column(k, &mut w.buf);
         }
     }
-    if !ok {
-        if let Some(l) = log {
-            l.truncate(start);
-        }
-    }
-    (f, ok)
+    a.finish(start)
 }
 
 /// [`pair`] column by column when its records did not fit: each column walked by the
 /// cursors and applied at once.
 #[inline(never)]
-fn pair_slow<C: Canvas>(
-    oc: (i32, i32),
-    nc: (i32, i32),
-    canvas: &mut C,
-    mut log: Option<&mut RunLog>,
-    w: &mut PairWork,
-) -> (Flags, bool) {
-    let mut f = Flags::default();
-    let mut ok = true;
-    let start = log.as_deref().map_or(0, RunLog::len);
+fn pair_slow<C: Canvas>(oc: (i32, i32), nc: (i32, i32), a: &mut Apply<'_, C>, w: &mut PairWork) {
     let lo = min_i(oc.0, nc.0);
     let hi = -min_i(-oc.1, -nc.1);
-    let mut one = [0u32; 10];
     // An index loop counted up to the number of columns (a `lo..=hi` range compiled to a
     // select that clobbered the condition codes on the 68k).
     let count = hi - lo + 1;
@@ -1084,39 +1119,17 @@ fn pair_slow<C: Canvas>(
             continue;
         }
         if ocol.rows == 0 || ncol.rows == 0 || !near(ocol, ncol) {
-            if let Some(l) = log.as_deref_mut() {
-                if ncol.rows != 0 {
-                    f.merge(paint(canvas, ncol, Op::Draw, buf));
-                }
-                if ocol.rows != 0 && ok {
-                    ok = l.push_column(ocol);
-                }
-            } else if ocol.rows != 0 {
-                f.merge(paint(canvas, ocol, Op::Erase, buf));
+            if ncol.rows != 0 {
+                a.new_column(ncol, buf);
+            }
+            if ocol.rows != 0 {
+                a.old_column(ocol, buf);
             }
             continue;
         }
         let col = ncol.col;
         walk_runs(ocol, ncol, cur, buf, &mut |r, rows, up, down| {
-            one[0] = rows;
-            if let Some(l) = log.as_deref_mut() {
-                if up != 0 {
-                    one[1] = up;
-                    f.merge(canvas.column(col, r as u32, &one, Op::Draw));
-                }
-                if down != 0 && ok {
-                    ok = l.push(col, r, rows, down);
-                }
-            } else if down != 0 {
-                one[1] = down;
-                f.merge(canvas.column(col, r as u32, &one, Op::Erase));
-            }
+            a.run(col, r, rows, up, down)
         });
     }
-    if !ok {
-        if let Some(l) = log {
-            l.truncate(start);
-        }
-    }
-    (f, ok)
 }
