@@ -157,6 +157,55 @@ pub fn chain_shape(table: &ChainTable, r_um: i32, alpha_u: i32) -> Option<Shape>
 fn fill(shape: &mut Shape, a: &db::ChainSample, b: &db::ChainSample, f: i32, c2: i32, alpha: i32) {
     let half = lerp(a.half1_u, b.half1_u, f).min(HALF_REV);
     shape.wraps = half >= HALF_REV;
+    // On the 68020 the loops below are `__cspace_fill` in the runtime's assembly (the
+    // compiled ones spent ~10,000 cycles an image); the system tests compare the image's
+    // vertices with these.
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            #[allow(clippy::too_many_arguments)]
+            fn __cspace_fill(
+                out: *mut Shape,
+                ua: *const i32,
+                ub: *const i32,
+                f_q16: i32,
+                half: i32,
+                c2: i32,
+                alpha: i32,
+                fraction_q15: *const i32,
+            );
+        }
+        // SAFETY: `shape` is a repr(C) Shape (its layout asserted in `raster`); the samples'
+        // chains and the fractions are CHAIN words each, only read.
+        unsafe {
+            __cspace_fill(
+                shape,
+                a.upper_u.as_ptr(),
+                b.upper_u.as_ptr(),
+                f,
+                half,
+                c2,
+                alpha,
+                db::FRACTION_Q15.as_ptr(),
+            )
+        }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    fill_host(shape, a, b, f, half, c2, alpha);
+}
+
+/// The host's [`fill`] after the half-width: the chains, the vertices' theta1 and the
+/// shift by `alpha` (the reference `__cspace_fill` is compared with).
+#[cfg(not(target_arch = "m68k"))]
+fn fill_host(
+    shape: &mut Shape,
+    a: &db::ChainSample,
+    b: &db::ChainSample,
+    f: i32,
+    half: i32,
+    c2: i32,
+    alpha: i32,
+) {
     for k in 0..CHAIN {
         shape.upper_u[k] = lerp(a.upper_u[k], b.upper_u[k], f);
     }
