@@ -1166,6 +1166,23 @@ __sense_process:
     .set    CUB, -44
     .set    CLB, -48
     .set    CJ, -52
+/* Both chains at the strip edge in frame slot \t on the segment in slot \seg (already in
+ * d0), each one unit outward (.Lceval), into slots \up and \low; leaves the lower's in d0. */
+    .macro  CHAINS_AT seg, t, up, low
+    move.l  \t(%a6), %d1
+    move.l  %a1, %a4
+    moveq   #0, %d3
+    bsr     .Lceval
+    addq.l  #1, %d0
+    move.l  %d0, \up(%a6)
+    move.l  \seg(%a6), %d0
+    move.l  \t(%a6), %d1
+    move.l  %a2, %a4
+    moveq   #1, %d3
+    bsr     .Lceval
+    subq.l  #1, %d0
+    move.l  %d0, \low(%a6)
+    .endm
 __cspace_columns:
     link    %a6, #-52
     movem.l %d2-%d7/%a2-%a5, -(%sp)
@@ -1218,19 +1235,7 @@ __cspace_columns:
     move.l  CEU(%a6), CUA(%a6)
     move.l  CEL(%a6), CLA(%a6)
     bra.s   5f
-4:  move.l  CA(%a6), %d1
-    move.l  %a1, %a4
-    moveq   #0, %d3
-    bsr     .Lceval
-    addq.l  #1, %d0
-    move.l  %d0, CUA(%a6)
-    move.l  CK(%a6), %d0
-    move.l  CA(%a6), %d1
-    move.l  %a2, %a4
-    moveq   #1, %d3
-    bsr     .Lceval
-    subq.l  #1, %d0
-    move.l  %d0, CLA(%a6)
+4:  CHAINS_AT CK, CA, CUA, CLA
 5:  move.l  CUA(%a6), %d4       /* umax */
     move.l  %d4, %d5            /* umin */
     move.l  CLA(%a6), %d6       /* lmax */
@@ -1263,19 +1268,7 @@ __cspace_columns:
 8:  bra.s   6b
 7:  move.l  %d0, CJ(%a6)
     /* the chains at b, kept as the next column's left edge */
-    move.l  CB(%a6), %d1
-    move.l  %a1, %a4
-    moveq   #0, %d3
-    bsr     .Lceval
-    addq.l  #1, %d0
-    move.l  %d0, CUB(%a6)
-    move.l  CJ(%a6), %d0
-    move.l  CB(%a6), %d1
-    move.l  %a2, %a4
-    moveq   #1, %d3
-    bsr     .Lceval
-    subq.l  #1, %d0
-    move.l  %d0, CLB(%a6)
+    CHAINS_AT CJ, CB, CUB, CLB
     move.l  CB(%a6), CET(%a6)
     move.l  CJ(%a6), CEK(%a6)
     move.l  CUB(%a6), CEU(%a6)
