@@ -443,7 +443,7 @@ fn pieces(k: &Column, out: &mut [u32; 10]) {
 #[inline(never)]
 pub fn shape<C: Canvas>(s: &Shape, canvas: &mut C, op: Op) -> Flags {
     let mut f = Flags::default();
-    let (c0, c1) = columns(&Some(*s));
+    let (c0, c1) = shape_columns(s);
     let mut k = 0usize; // segment holding the strip's left edge
     let mut edge = Edge::NONE;
     let mut buf = [0u32; 10];
@@ -748,9 +748,14 @@ fn column_at(cols: &[MaybeUninit<Column>; MAX_COLUMNS], range: (i32, i32), c: i3
 
 /// The unwrapped columns `c0..=c1` of image `s` (none: an empty range).
 fn columns(s: &Option<Shape>) -> (i32, i32) {
-    let Some(s) = s else {
-        return (END, -END);
-    };
+    match s {
+        Some(s) => shape_columns(s),
+        None => (END, -END),
+    }
+}
+
+/// The unwrapped columns `c0..=c1` of image `s`.
+fn shape_columns(s: &Shape) -> (i32, i32) {
     let t = &s.theta1_u;
     if s.wraps {
         let c0 = pix(t[0]);
