@@ -767,7 +767,7 @@ fn shape_columns(s: &Shape) -> (i32, i32) {
 
 /// Moves `old` by whole revolutions (the same pixels) so that it lies within half a
 /// revolution of `new` along theta1: then their columns and rows pair up unwrapped.
-pub fn align(old: &mut Shape, new: &Shape) {
+fn align(old: &mut Shape, new: &Shape) {
     let mut d = 0;
     while old.theta1_u[0] + d - new.theta1_u[0] > crate::HALF_REV {
         d -= crate::UNITS_PER_REV;
@@ -1058,16 +1058,19 @@ impl<'a, C: Canvas> Apply<'a, C> {
 /// to the log, for [`RunLog::erase`] once every first half of the job is done (new before
 /// old: no void opens, thesis lines 1199-1210). Returns false when the log filled up (this
 /// pair's words are then dropped and the caller runs the second half without a log).
-/// Without `log`, this is the second half: the decrements go to the canvas. `old` must be
-/// [`align`]ed to `new`.
+/// Without `log`, this is the second half: the decrements go to the canvas. `old` is first
+/// aligned to `new` (moved by whole revolutions: the same pixels).
 #[inline(never)]
 pub fn pair<C: Canvas>(
-    old: &Option<Shape>,
+    old: &mut Option<Shape>,
     new: &Option<Shape>,
     canvas: &mut C,
     log: Option<&mut RunLog>,
     w: &mut PairWork,
 ) -> (Flags, bool) {
+    if let (Some(o), Some(n)) = (old.as_mut(), new) {
+        align(o, n);
+    }
     let start = log.as_deref().map_or(0, RunLog::len);
     let (oc, nc) = (columns(old), columns(new));
     if let Some(s) = old {

@@ -239,9 +239,6 @@ fn moved(h: &mut Memory, old: &Images, new: &Images, room: usize) -> Result<Flag
     let mut pairs = [(old.front, new.front), (old.rear, new.rear)];
     let mut logged = [true; 2];
     for (k, (o, n)) in pairs.iter_mut().enumerate() {
-        if let (Some(o), Some(n)) = (o.as_mut(), n.as_ref()) {
-            raster::align(o, n);
-        }
         let (fl, ok) = raster::pair(o, n, &mut h.canvas(), Some(&mut log), &mut cur);
         f.merge(fl);
         logged[k] = ok;
@@ -267,7 +264,7 @@ fn moved(h: &mut Memory, old: &Images, new: &Images, room: usize) -> Result<Flag
     // The filler runs decrement nothing (no counters).
     f.merge(log.erase(&mut h.canvas()));
     prop_assert!(filler == 0 || log.len() >= filler);
-    for (k, (o, n)) in pairs.iter().enumerate() {
+    for (k, (o, n)) in pairs.iter_mut().enumerate() {
         if !logged[k] {
             let (fl, _) = raster::pair(o, n, &mut h.canvas(), None, &mut cur);
             f.merge(fl);

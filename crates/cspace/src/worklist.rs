@@ -278,14 +278,8 @@ fn update<B: GlobalBus + ?Sized>(
             f.merge(raster::stripe(s, &mut canvas, Op::Draw));
         }
         sc.old_stripes[i] = sc.old.stripe;
-        if let (Some(o), Some(n)) = (&mut sc.old.front, &sc.new.front) {
-            raster::align(o, n);
-        }
-        if let (Some(o), Some(n)) = (&mut sc.old.rear, &sc.new.rear) {
-            raster::align(o, n);
-        }
         let (fl, ok) = raster::pair(
-            &sc.old.front,
+            &mut sc.old.front,
             &sc.new.front,
             &mut canvas,
             Some(&mut sc.log),
@@ -294,7 +288,7 @@ fn update<B: GlobalBus + ?Sized>(
         f.merge(fl);
         sc.logged[2 * i] = ok;
         let (fl, ok) = raster::pair(
-            &sc.old.rear,
+            &mut sc.old.rear,
             &sc.new.rear,
             &mut canvas,
             Some(&mut sc.log),
@@ -316,11 +310,8 @@ fn update<B: GlobalBus + ?Sized>(
         images_of(new, i, &mut sc.new);
         images_of(&old, i, &mut sc.old);
         if !sc.logged[2 * i] {
-            if let (Some(o), Some(n)) = (&mut sc.old.front, &sc.new.front) {
-                raster::align(o, n);
-            }
             let (fl, _) = raster::pair(
-                &sc.old.front,
+                &mut sc.old.front,
                 &sc.new.front,
                 &mut canvas,
                 None,
@@ -329,10 +320,13 @@ fn update<B: GlobalBus + ?Sized>(
             f.merge(fl);
         }
         if !sc.logged[2 * i + 1] {
-            if let (Some(o), Some(n)) = (&mut sc.old.rear, &sc.new.rear) {
-                raster::align(o, n);
-            }
-            let (fl, _) = raster::pair(&sc.old.rear, &sc.new.rear, &mut canvas, None, &mut sc.pair);
+            let (fl, _) = raster::pair(
+                &mut sc.old.rear,
+                &sc.new.rear,
+                &mut canvas,
+                None,
+                &mut sc.pair,
+            );
             f.merge(fl);
         }
     }
