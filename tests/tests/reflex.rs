@@ -607,3 +607,83 @@ fn the_servo_rides_out_a_torn_subgoal_briefly_and_faults_on_one_left_torn() {
     assert_eq!(st.fault(), Some(vme_map::FaultCode::TornRecord));
     assert_eq!(st.state(), Some(vme_map::BoardState::Degraded));
 }
+
+/// The reflex's known columns (`reflex::window::Known`, the runtime's `__reflex_known_hits`
+/// on the image) against the host, step for step: rectangles and columns asked again and
+/// again around a moving place, pixels and stripe words written between (each followed by
+/// its column's raise), across the torus's edges. Every answer, words read and pixels
+/// vouched for included, must be the host's; and most must be vouched for without a read.
+#[test]
+fn the_reflex_images_known_columns_match_the_host() {
+    use reflex::script::{scripted_known, KNOWN_IN_WORDS, KNOWN_OUT_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = global_with(&[(300, 300, 30), (-200, 350, 25), (100, -380, 40)]);
+    let mut rng = Rng::new(5);
+    let mut asks = Vec::new();
+    let (mut at1, mut at2) = (120i32, 60i32);
+    for _ in 0..1500 {
+        let mut r = |m: u64| (rng.next_u64() % m) as i32;
+        match r(12) {
+            // A write near the place asked about: set or (twice as often) cleared, now and
+            // then a stripe.
+            0 => {
+                let stripe = (r(8) == 0) as i32;
+                let set = (r(3) == 0) as i32;
+                asks.extend_from_slice(&[0, at1 + r(30) - 5, at2 + r(50) - 5, stripe, set]);
+            }
+            // The place drifts as an arm's would.
+            2 => {
+                at1 += r(5) - 2;
+                at2 += r(5) - 2;
+            }
+            3 => asks.extend_from_slice(&[2, at1 + r(24) - 2, 0, at2 + r(8) - 4, 1 + r(40)]),
+            _ => {
+                let tall = r(20) == 0;
+                asks.extend_from_slice(&[
+                    1,
+                    at1 + r(3) - 1,
+                    1 + r(20),
+                    at2 + r(3) - 1,
+                    1 + r(if tall { 130 } else { 40 }),
+                ])
+            }
+        }
+    }
+    let mut host_global = global.clone();
+    let mut k = reflex::window::Known::new();
+    let host: Vec<[i32; KNOWN_OUT_WORDS]> = asks
+        .chunks(KNOWN_IN_WORDS)
+        .map(|w| {
+            let mut o = [0; KNOWN_OUT_WORDS];
+            scripted_known(
+                &mut k,
+                &mut ArrayBus::new(&mut host_global),
+                w.try_into().unwrap(),
+                &mut o,
+            );
+            o
+        })
+        .collect();
+    let (read, vouched): (i64, i64) = host
+        .iter()
+        .fold((0, 0), |(a, b), o| (a + o[1] as i64, b + o[2] as i64));
+    let frees = host.iter().filter(|o| o[0] == 1).count();
+    assert!(
+        vouched > 3 * read && frees > 200,
+        "{read} words read, {vouched} pixels vouched for, {frees} free answers"
+    );
+    probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_known",
+        &asks,
+        KNOWN_IN_WORDS,
+        &host,
+        "step",
+    );
+    assert_eq!(global, host_global, "the writes left the same global RAM");
+    eprintln!(
+        "{} known-column steps: {read} words read, {vouched} pixels vouched for, {frees} free",
+        host.len()
+    );
+}

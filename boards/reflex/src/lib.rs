@@ -53,6 +53,8 @@ pub struct Board {
     input: Input,
     /// The work-list entry read last.
     entry: u32,
+    /// The reflex's outputs, written in place each pass.
+    out: reflex::Output,
 }
 
 impl Default for Board {
@@ -98,6 +100,16 @@ impl Board {
                 obstacles: [reflex::ObstacleView::NONE; reflex::OBSTACLES],
             },
             entry: 0,
+            out: reflex::Output {
+                subgoal_urad: None,
+                flags: 0,
+                goal_urad: [0; 2],
+                window: [(0, 0); 2],
+                tests: 0,
+                known: 0,
+                dt_us: 0,
+                new_fault: None,
+            },
         }
     }
 
@@ -148,7 +160,12 @@ impl Board {
         inp.health.objects_frame = self.objects_w[0];
         inp.health.objects_torn = !ok;
         // One work-list entry a pass, in turn (the health limits are 20-100 ms).
-        self.entry = (self.entry + 1) % ENTRIES as u32;
+        // (A compare, not `%`: a division call on the 68020.)
+        self.entry = if self.entry + 1 >= ENTRIES as u32 {
+            0
+        } else {
+            self.entry + 1
+        };
         fill_health(&mut inp.health, g, &self.objects_w, ok, self.entry);
         inp.health.fresh = 1 << self.entry;
         inp.obstacles_moving = ok && moving(&self.objects_w);
@@ -156,7 +173,9 @@ impl Board {
         if inp.obstacles_moving {
             obstacles(&mut inp.obstacles, g, &self.objects_w, ok);
         }
-        let out = self.reflex.step(&self.input, &mut BusMap(&mut *g));
+        self.reflex
+            .step_into(&self.input, &mut BusMap(&mut *g), &mut self.out);
+        let out = &self.out;
         if let Some(sub) = out.subgoal_urad {
             self.cycle = self.cycle.wrapping_add(1);
             let span = |s: (i32, i32)| {
@@ -171,6 +190,7 @@ impl Board {
                     out.goal_urad[1] as u32,
                     (span(out.window[0]) << 16) | span(out.window[1]),
                     out.tests,
+                    out.known,
                     out.dt_us,
                 ],
             );
@@ -228,16 +248,28 @@ fn wand(t: &[u32; OBJECT_WORDS], ok: bool) -> GoalInput {
 }
 
 /// Whether the sensing board flags any valid obstacle beacon as moving.
+/// (The beacons named one by one: the loop over the table of indices cost the 68020 ~600
+/// cycles a pass.)
 #[inline(never)]
 fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
-    let mut any = 0;
-    let mut i = 0;
-    while i < OBSTACLE_BEACONS.len() {
-        let f = beacon_word(t, OBSTACLE_BEACONS[i] as usize, 3);
-        any |= f & (f << 7) & beacon_flags::MOVING;
-        i += 1;
-    }
-    any != 0
+    const B: [usize; 6] = [
+        OBSTACLE_BEACONS[0] as usize,
+        OBSTACLE_BEACONS[1] as usize,
+        OBSTACLE_BEACONS[2] as usize,
+        OBSTACLE_BEACONS[3] as usize,
+        OBSTACLE_BEACONS[4] as usize,
+        OBSTACLE_BEACONS[5] as usize,
+    ];
+    // Flags words: the valid bit moved up to the moving bit's place, and both.
+    let (f0, f1, f2) = (t[4 * B[0] + 4], t[4 * B[1] + 4], t[4 * B[2] + 4]);
+    let (f3, f4, f5) = (t[4 * B[3] + 4], t[4 * B[4] + 4], t[4 * B[5] + 4]);
+    let any = (f0 & (f0 << 7))
+        | (f1 & (f1 << 7))
+        | (f2 & (f2 << 7))
+        | (f3 & (f3 << 7))
+        | (f4 & (f4 << 7))
+        | (f5 & (f5 << 7));
+    any & beacon_flags::MOVING != 0
 }
 
 const _: () = assert!(reflex::OBSTACLES == OBSTACLE_BEACONS.len());

@@ -103,6 +103,35 @@ pub extern "C" fn reflex_probe_evade(asks: *const i32, n: u32, out: *mut i32) ->
     0
 }
 
+/// Test probe (never called by the board): `n` known-columns steps
+/// (`reflex::script::KNOWN_IN_WORDS` words each) on the map in global RAM, through one
+/// `Known` kept from call to call; writes `reflex::script::KNOWN_OUT_WORDS` words per step
+/// to `out`. The system tests compare it with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_known"]
+pub extern "C" fn reflex_probe_known(steps: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{KNOWN_IN_WORDS, KNOWN_OUT_WORDS};
+    static mut KNOWN: reflex::window::Known = reflex::window::Known::new();
+    // SAFETY: the probe is the only code that touches KNOWN.
+    let k = unsafe { &mut *core::ptr::addr_of_mut!(KNOWN) };
+    // SAFETY: the probe runs on the reflex image, where global RAM is mapped.
+    let mut g = unsafe { MmioGlobal::new() };
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes KNOWN_IN_WORDS n words and room for KNOWN_OUT_WORDS n
+        // outputs, word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(steps.add(KNOWN_IN_WORDS * i as usize) as *const [i32; KNOWN_IN_WORDS]),
+                &mut *(out.add(KNOWN_OUT_WORDS * i as usize) as *mut [i32; KNOWN_OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_known(k, &mut g, w, o);
+        i += 1;
+    }
+    0
+}
+
 fn safe_stop() {
     // SAFETY: called by the runtime on this board, where the private I/O is mapped.
     board_reflex::safe(&mut unsafe { MmioIo::new() });

@@ -18,7 +18,7 @@
 use crate::counters::{self, Flags, ALL, M1, M2, P1, P2};
 use crate::{Shape, Stripe, UNITS_PER_PIXEL};
 use core::mem::MaybeUninit;
-use vme_map::layout::{cspace_counter, CSPACE_SIDE, CSPACE_STRIPES};
+use vme_map::layout::{cspace_counter, raise_column_gen, CSPACE_SIDE, CSPACE_STRIPES};
 use vme_map::GlobalBus;
 
 /// Whether an update draws or erases.
@@ -96,12 +96,25 @@ impl Canvas for SliceCanvas<'_> {
 /// The map and stripe layer in global RAM (`vme_map::layout::CSPACE_MAP`, `CSPACE_STRIPES`).
 pub struct BusCanvas<'a, B: GlobalBus + ?Sized>(pub &'a mut B);
 
-impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
+impl<B: GlobalBus + ?Sized> BusCanvas<'_, B> {
+    /// Pixel (`i1`, `i2`)'s word updated, the column's generation not yet raised.
     #[inline(always)]
-    fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags {
+    fn word(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags {
         let a = cspace_counter(i1, i2, 0);
         let (v, f) = update(self.0.read_u32(a), mask, op);
         self.0.write_u32(a, v);
+        f
+    }
+}
+
+/// Every write raises the written column's generation after it
+/// (`vme_map::layout::CSPACE_GENS`: the reflex reads again only columns whose generation
+/// moved).
+impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
+    #[inline]
+    fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags {
+        let f = self.word(i1, i2, mask, op);
+        raise_column_gen(self.0, i1);
         f
     }
     #[inline]
@@ -109,11 +122,12 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
         let a = CSPACE_STRIPES + 4 * i1;
         let (v, f) = update(self.0.read_u32(a), mask, op);
         self.0.write_u32(a, v);
+        raise_column_gen(self.0, i1);
         f
     }
     /// The whole column in one [`GlobalBus::count_column`] call (the runtime's assembly on
     /// the 68020); a pixel it stops at takes the byte-by-byte update and the column goes on
-    /// after it.
+    /// after it. One raise of the generation, after the whole column.
     #[inline(never)]
     fn column(&mut self, i1: u32, i2: u32, pieces: &[u32; 10], op: Op) -> Flags {
         let mut f = Flags::default();
@@ -124,9 +138,10 @@ impl<B: GlobalBus + ?Sized> Canvas for BusCanvas<'_, B> {
         loop {
             done = self.0.count_column(col, i2 & WRAP, pieces, done, down);
             if done >= total {
+                raise_column_gen(self.0, i1);
                 return f;
             }
-            f.merge(self.pixel(i1, i2.wrapping_add(done) & WRAP, mask_at(pieces, done), op));
+            f.merge(self.word(i1, i2.wrapping_add(done) & WRAP, mask_at(pieces, done), op));
             done += 1;
         }
     }

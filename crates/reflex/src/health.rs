@@ -99,8 +99,9 @@ pub struct Monitor {
     frame_seen: i32,
     /// Some entry lags or is undrawn right now (not yet for long): -1.
     behind_now: i32,
-    /// Per entry, at its last reading: torn, lagging, behind now (masks).
-    verdict: [[i32; 3]; ENTRIES],
+    /// Per entry, at its last reading, as bit `i` of each word: torn, lagging, behind now
+    /// (bits: the or over the entries is then one test, not a loop of 18 loads).
+    verdict: [u32; 3],
     /// Bit `i`: entry `i` has been read at least once.
     seen: u32,
 }
@@ -129,7 +130,7 @@ impl Monitor {
             hb_seen: 0,
             frame_seen: 0,
             behind_now: 0,
-            verdict: [[0; 3]; ENTRIES],
+            verdict: [0; 3],
             seen: 0,
         }
     }
@@ -175,15 +176,9 @@ impl Monitor {
             }
             i += 1;
         }
-        let (mut torn, mut lag, mut behind_now) = (0, 0, 0);
-        let mut i = 0;
-        while i < ENTRIES {
-            torn |= self.verdict[i][0];
-            lag |= self.verdict[i][1];
-            behind_now |= self.verdict[i][2];
-            i += 1;
-        }
-        self.behind_now = behind_now;
+        let [torn, lag, behind_now] = self.verdict;
+        let (torn, lag) = (nonzero(torn), nonzero(lag));
+        self.behind_now = nonzero(behind_now);
         let stale = !self.hb_seen | older(self.hb_since_us, MAP_STALE_US);
         let objects = !self.frame_seen | older(self.frame_since_us, OBJECTS_STALE_US);
         // In order of precedence: stale map, torn map, lagging map, stale positions.
@@ -217,11 +212,14 @@ impl Monitor {
         self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
         let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
         self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
-        self.verdict[i] = [
+        let bit = 1u32 << i;
+        let put = |word: u32, m: i32| (word & !bit) | (m as u32 & bit);
+        self.verdict[0] = put(
+            self.verdict[0],
             older(self.claimed_since_us[i], MAP_TORN_US),
-            older(self.lag_since_us[i], LAG_US),
-            behind,
-        ];
+        );
+        self.verdict[1] = put(self.verdict[1], older(self.lag_since_us[i], LAG_US));
+        self.verdict[2] = put(self.verdict[2], behind);
         self.entries[i] = *e;
     }
 }

@@ -202,3 +202,55 @@ pub fn scripted_evade(
         a += 1;
     }
 }
+
+/// Words of one known-columns step ([`scripted_known`]): kind (0 a write, 1 a rectangle, 2
+/// a column), then four. A write: column, row, stripe (0/1), the word; a rectangle: first
+/// column, columns, first row, rows (unwrapped); a column: column, unused, first row, rows.
+pub const KNOWN_IN_WORDS: usize = 5;
+/// Words of one known-columns answer: free (0/1), words read, pixels vouched for (all 0
+/// after a write).
+pub const KNOWN_OUT_WORDS: usize = 3;
+
+/// One step of [`crate::window::Known`] over the map in global RAM `g`: a write (the map's
+/// or stripe's word, then the column's generation raised, as the C-space boards write) or a
+/// rectangle or column asked through `k`. For the image's probe `reflex_probe_known` and
+/// the system tests (the runtime's `__reflex_known_hits` against the host's loop).
+#[inline(never)]
+pub fn scripted_known<G: vme_map::GlobalBus>(
+    k: &mut crate::window::Known,
+    g: &mut G,
+    w: &[i32; KNOWN_IN_WORDS],
+    out: &mut [i32; KNOWN_OUT_WORDS],
+) {
+    use crate::window::{self, BusMap, Span};
+    *out = [0; KNOWN_OUT_WORDS];
+    let s2 = Span {
+        lo: w[3],
+        hi: w[3] + w[4] - 1,
+    };
+    let mut tests = 0;
+    let free = match w[0] {
+        0 => {
+            let i1 = (w[1] & 127) as u32;
+            let off = if w[3] != 0 {
+                vme_map::layout::CSPACE_STRIPES + 4 * i1
+            } else {
+                vme_map::layout::cspace_counter(i1, (w[2] & 127) as u32, 0)
+            };
+            g.write_u32(off, w[4] as u32);
+            vme_map::layout::raise_column_gen(g, i1);
+            return;
+        }
+        1 => {
+            let s1 = Span {
+                lo: w[1],
+                hi: w[1] + w[2] - 1,
+            };
+            window::rect_free_known(&mut BusMap(&mut *g), k, s1, s2, &mut tests)
+        }
+        _ => window::col_free_known(&mut BusMap(&mut *g), k, w[1], s2, &mut tests),
+    };
+    out[0] = free as i32;
+    out[1] = tests as i32;
+    out[2] = k.take_vouched() as i32;
+}

@@ -626,3 +626,153 @@ fn an_arm_resting_in_the_margin_backs_off_though_its_goal_keeps_changing() {
         "the arm stayed at {th:?} (from {th0:?})"
     );
 }
+
+/// A global RAM with the map's words written one by one and each written column's
+/// generation raised after, as the C-space boards' canvas does.
+struct Gram(Vec<u8>);
+
+impl Gram {
+    fn new() -> Self {
+        Gram(vec![0; vme_map::layout::CSPACE_MAP as usize + 0x1_0000])
+    }
+    fn bus(&mut self) -> vme_map::ArrayBus<'_> {
+        vme_map::ArrayBus::new(&mut self.0)
+    }
+    /// Writes pixel (`i1`, `i2`)'s word (`stripe`: column `i1`'s stripe word) and raises
+    /// the column's generation.
+    fn write(&mut self, i1: u32, i2: u32, stripe: bool, v: u32) {
+        use vme_map::GlobalBus;
+        let mut g = self.bus();
+        let off = if stripe {
+            vme_map::layout::CSPACE_STRIPES + 4 * i1
+        } else {
+            vme_map::layout::cspace_counter(i1, i2, 0)
+        };
+        g.write_u32(off, v);
+        vme_map::layout::raise_column_gen(&mut g, i1);
+    }
+}
+
+/// One step of the known-columns check: a write (pixel or stripe, set or cleared) or a
+/// rectangle or column asked.
+#[derive(Clone, Debug)]
+enum KnownOp {
+    Write {
+        i1: u32,
+        i2: u32,
+        stripe: bool,
+        set: bool,
+    },
+    Rect {
+        lo1: i32,
+        n1: i32,
+        lo2: i32,
+        n2: i32,
+    },
+    Col {
+        i1: i32,
+        lo2: i32,
+        n2: i32,
+    },
+}
+
+fn known_op() -> impl Strategy<Value = KnownOp> {
+    prop_oneof![
+        (
+            0u32..128,
+            0u32..128,
+            prop::bool::weighted(0.1),
+            any::<bool>()
+        )
+            .prop_map(|(i1, i2, stripe, set)| KnownOp::Write {
+                i1,
+                i2,
+                stripe,
+                set
+            }),
+        // Rectangles near one place (what the reflex asks pass after pass), across the
+        // torus's edges, up to the whole axis.
+        (-20i32..20, 1i32..40, -20i32..20, 1i32..140)
+            .prop_map(|(lo1, n1, lo2, n2)| KnownOp::Rect { lo1, n1, lo2, n2 }),
+        (-20i32..20, -20i32..20, 1i32..140).prop_map(|(i1, lo2, n2)| KnownOp::Col { i1, lo2, n2 }),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+    /// Whatever was written between the questions (each write followed by its column's
+    /// raise), the rectangles and columns the known columns call free are exactly the
+    /// ones a full read calls free; and a question asked again with nothing written reads
+    /// no word.
+    #[test]
+    fn known_columns_answer_as_a_full_read(
+        ops in proptest::collection::vec(known_op(), 1..120),
+        start in proptest::collection::vec((0u32..128, 0u32..128), 0..40),
+    ) {
+        let mut gram = Gram::new();
+        for &(i1, i2) in &start {
+            gram.write(i1, i2, false, 1);
+        }
+        let mut k = window::Known::new();
+        for op in &ops {
+            match *op {
+                KnownOp::Write { i1, i2, stripe, set } => gram.write(i1, i2, stripe, set as u32),
+                KnownOp::Rect { lo1, n1, lo2, n2 } => {
+                    let s1 = Span { lo: lo1, hi: lo1 + n1 - 1 };
+                    let s2 = Span { lo: lo2, hi: lo2 + n2 - 1 };
+                    let mut g = gram.bus();
+                    let mut m = window::BusMap(&mut g);
+                    let (mut t_full, mut t_known, mut t_again) = (0, 0, 0);
+                    let full = window::rect_free(&mut m, s1, s2, &mut t_full);
+                    let known = window::rect_free_known(&mut m, &mut k, s1, s2, &mut t_known);
+                    prop_assert_eq!(known, full, "{:?}", op);
+                    let again = window::rect_free_known(&mut m, &mut k, s1, s2, &mut t_again);
+                    prop_assert_eq!(again, full);
+                    if full {
+                        prop_assert_eq!(t_again, 0, "a free rectangle asked again is read again");
+                    }
+                }
+                KnownOp::Col { i1, lo2, n2 } => {
+                    let s2 = Span { lo: lo2, hi: lo2 + n2 - 1 };
+                    let mut g = gram.bus();
+                    let mut m = window::BusMap(&mut g);
+                    let (mut t_full, mut t_known) = (0, 0);
+                    let full = window::col_free(&mut m, i1, s2, &mut t_full);
+                    let known = window::col_free_known(&mut m, &mut k, i1, s2, &mut t_known);
+                    prop_assert_eq!(known, full, "{:?}", op);
+                }
+            }
+        }
+    }
+}
+
+/// A column written after it was read free is read again (its generation moved), and only
+/// that column: the others are vouched for.
+#[test]
+fn a_written_column_is_read_again_and_only_it() {
+    let mut gram = Gram::new();
+    let mut k = window::Known::new();
+    let (s1, s2) = (Span { lo: 10, hi: 19 }, Span { lo: 30, hi: 49 });
+    let ask = |gram: &mut Gram, k: &mut window::Known| {
+        let mut g = gram.bus();
+        let mut tests = 0;
+        let free = window::rect_free_known(&mut window::BusMap(&mut g), k, s1, s2, &mut tests);
+        (free, tests, k.take_vouched())
+    };
+    // First time: every column's stripe and 20 rows.
+    assert_eq!(ask(&mut gram, &mut k), (true, 10 * 21, 0));
+    assert_eq!(ask(&mut gram, &mut k), (true, 0, 200));
+    // A pixel outside the rectangle, in column 12: that column read again, still free.
+    gram.write(12, 60, false, 1);
+    assert_eq!(ask(&mut gram, &mut k), (true, 21, 180));
+    // Inside it: not free; the columns before 15 vouched for, 15 read up to the mark.
+    gram.write(15, 35, false, 1);
+    assert_eq!(ask(&mut gram, &mut k), (false, 1 + 6, 5 * 20));
+    // The mark cleared: free again, column 15 read again.
+    gram.write(15, 35, false, 0);
+    let (free, tests, _) = ask(&mut gram, &mut k);
+    assert!(free && tests == 21, "{tests}");
+    // A stripe word set in column 19: not free.
+    gram.write(19, 0, true, 1);
+    assert!(!ask(&mut gram, &mut k).0);
+}

@@ -75,6 +75,29 @@ pub trait Map {
             i1 & 31,
         )
     }
+    /// How many of rows `i2 .. i2 + n` (`i2 + n <= 128`) of column `i1`, from the first,
+    /// are free (its map words zero; the stripe word is not read). The default reads
+    /// through [`Map::free_rows`].
+    fn col_run(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        self.free_rows(i2, n, i1, 1, i1, 0)
+    }
+    /// The address of the 128 generation words where the map is memory-mapped (the
+    /// image), for the runtime's assembly; `None` elsewhere.
+    fn gens_ptr(&mut self) -> Option<*const u32> {
+        None
+    }
+    /// Whether the map has column generations ([`Map::column_gen`]); without them
+    /// [`Known`] reads every pixel every time.
+    fn has_gens(&self) -> bool {
+        false
+    }
+    /// Column `i1`'s generation (`vme_map::layout::CSPACE_GENS`): raised after every write
+    /// to the column, so a column whose generation has not moved since it was read holds
+    /// what it held then. Meaningful only when [`Map::has_gens`].
+    fn column_gen(&mut self, i1: u32) -> u32 {
+        let _ = i1;
+        0
+    }
     /// Bit `k` set when stripe `i1 + k` is marked, `k` < 32 (`i1` a multiple of 32).
     fn stripe_bits(&mut self, i1: u32) -> u32 {
         let mut bits = 0;
@@ -93,6 +116,20 @@ pub trait Map {
 pub struct BusMap<'a, G: vme_map::GlobalBus>(pub &'a mut G);
 
 impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
+    fn has_gens(&self) -> bool {
+        true
+    }
+    fn column_gen(&mut self, i1: u32) -> u32 {
+        self.0.read_u32(vme_map::layout::cspace_gen(i1))
+    }
+    fn col_run(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_SIDE};
+        self.0
+            .zero_run(cspace_counter(i1, i2, 0), n, CSPACE_SIDE * CSPACE_COUNTERS)
+    }
+    fn gens_ptr(&mut self) -> Option<*const u32> {
+        self.0.word_ptr(vme_map::layout::CSPACE_GENS)
+    }
     fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
         self.0
             .or_words(vme_map::layout::cspace_counter(i1, i2, 0), n, 4)
@@ -237,6 +274,225 @@ pub fn rect_free<M: Map + ?Sized>(m: &mut M, s1: Span, s2: Span, tests: &mut u32
     rows_free(m, b0, m0, a0, n0, a1, n1, tests) && rows_free(m, b1, m1, a0, n0, a1, n1, tests)
 }
 
+/// What the reflex learnt of each column in earlier passes: a run of rows read free (the
+/// column's stripe word zero) and the column's generation ([`Map::column_gen`]) read
+/// before them. While the generation stays, the run needs no read: the thesis tested only
+/// the arrest region's leading borders each pass (ch. V section 7), trusting the rest to
+/// the passes before; here the generations say which columns an obstacle's redraw touched
+/// since, so the trust is earned. `repr(C)`: the runtime's `__reflex_known_hits` reads it.
+#[derive(Clone, Debug)]
+#[repr(C)]
+pub struct Known {
+    /// The generation each column's run was read at.
+    gen: [u32; SIDE as usize],
+    /// First row of each column's run (map index).
+    start: [u8; SIDE as usize],
+    /// Rows in each column's run: 0 (nothing known) to 127, wrapping past row 127, or
+    /// [`WHOLE`].
+    len: [u8; SIDE as usize],
+    /// Pixels vouched for without a read since [`Known::take_vouched`].
+    vouched: u32,
+}
+
+/// A run of the whole column: wider than any run of rows asked plus its offset from the
+/// run's start (at most 127 + 128), so it holds every one.
+const WHOLE: u8 = 255;
+
+/// [`Known::next`]'s answer for a column that is not free: past any column.
+const BLOCKED: u32 = u32::MAX;
+
+// The layout `__reflex_known_hits` in the runtime's assembly reads.
+const _: () = assert!(core::mem::offset_of!(Known, start) == 512);
+const _: () = assert!(core::mem::offset_of!(Known, len) == 640);
+
+impl Default for Known {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Known {
+    /// Nothing known.
+    pub const fn new() -> Self {
+        Self {
+            gen: [0; SIDE as usize],
+            start: [0; SIDE as usize],
+            len: [0; SIDE as usize],
+            vouched: 0,
+        }
+    }
+
+    /// Pixels vouched for without a read since the last call.
+    pub fn take_vouched(&mut self) -> u32 {
+        core::mem::take(&mut self.vouched)
+    }
+
+    /// How many of columns `c .. c + n` (not wrapping), from `c`, the runs vouch for over
+    /// rows `q .. q + rows` (wrapping): generation unchanged and the run holding the rows.
+    /// On the 68020 `__reflex_known_hits` in the runtime's assembly (the compiled loop
+    /// spent ~370 cycles a column on spills); the system tests compare it with this code.
+    #[inline(always)]
+    fn hits<M: Map + ?Sized>(&self, m: &mut M, c: u32, n: u32, q: u32, rows: u32) -> u32 {
+        #[cfg(target_arch = "m68k")]
+        if let Some(gens) = m.gens_ptr() {
+            extern "C" {
+                fn __reflex_known_hits(
+                    gens: *const u32,
+                    k: *const Known,
+                    c: u32,
+                    n: u32,
+                    q: u32,
+                    m: u32,
+                ) -> u32;
+            }
+            // SAFETY: `gens` points at the 128 generation words; `c + n <= 128`; the
+            // routine only reads.
+            return unsafe { __reflex_known_hits(gens, self, c, n, q, rows) };
+        }
+        let mut h = 0;
+        while h < n {
+            let i = (c + h) as usize;
+            let (s, l) = (self.start[i] as u32, self.len[i] as u32);
+            if self.gen[i] != m.column_gen(c + h) || (q.wrapping_sub(s) & (SIDE - 1)) + rows > l {
+                break;
+            }
+            h += 1;
+        }
+        h
+    }
+
+    /// Whether column `c` is free over rows `q .. q + rows` (wrapping), its generation `g`
+    /// read before: what the run vouches for (forgotten if the generation moved), the rest
+    /// read, the run grown by what that shows (or a new one started at `q` when it does not
+    /// meet the old).
+    #[inline(never)]
+    fn column<M: Map + ?Sized>(
+        &mut self,
+        m: &mut M,
+        c: u32,
+        g: u32,
+        q: u32,
+        rows: u32,
+        tests: &mut u32,
+    ) -> bool {
+        let i = c as usize;
+        if self.gen[i] != g {
+            self.gen[i] = g;
+            self.len[i] = 0;
+        }
+        let (s, l) = (self.start[i] as u32, self.len[i] as u32);
+        if l == 0 {
+            *tests += 1;
+            if m.stripes_or(c, 1) != 0 {
+                return false;
+            }
+        }
+        let d = q.wrapping_sub(s) & (SIDE - 1);
+        let known = if d < l { (l - d).min(rows) } else { 0 };
+        self.vouched += known;
+        if known == rows {
+            return true;
+        }
+        // The rows past the run, in at most two pieces that do not wrap.
+        let from = (q + known) & (SIDE - 1);
+        let want = rows - known;
+        let first = want.min(SIDE - from);
+        let mut free = m.col_run(c, from, first);
+        *tests += (free + 1).min(first);
+        if free == first && want > first {
+            let more = m.col_run(c, 0, want - first);
+            *tests += (more + 1).min(want - first);
+            free += more;
+        }
+        let (s, run) = if d <= l { (s, l + free) } else { (q, free) };
+        self.start[i] = s as u8;
+        self.len[i] = if run >= SIDE { WHOLE } else { run as u8 };
+        free == want
+    }
+
+    /// Whether columns `a .. a + n` (not wrapping) are free over rows `q .. q + rows`.
+    #[inline(never)]
+    fn columns<M: Map + ?Sized>(
+        &mut self,
+        m: &mut M,
+        a: u32,
+        n: u32,
+        q: u32,
+        rows: u32,
+        tests: &mut u32,
+    ) -> bool {
+        let mut c = a;
+        let end = a + n;
+        // `column` hands back the next column, or BLOCKED (a bool result tested after the
+        // loop variable's copy branched on the copy's flags: docs/toolchain.md, class 1).
+        while c < end {
+            let h = self.hits(m, c, end - c, q, rows);
+            self.vouched += h * rows;
+            c = self.next(m, c + h, end, q, rows, tests);
+        }
+        c == end
+    }
+
+    /// Past column `c` if it is free over the rows (`end` if `c` is `end`), else
+    /// [`BLOCKED`].
+    #[inline(never)]
+    fn next<M: Map + ?Sized>(
+        &mut self,
+        m: &mut M,
+        c: u32,
+        end: u32,
+        q: u32,
+        rows: u32,
+        tests: &mut u32,
+    ) -> u32 {
+        if c >= end {
+            return end;
+        }
+        let g = m.column_gen(c);
+        if self.column(m, c, g, q, rows, tests) {
+            c + 1
+        } else {
+            BLOCKED
+        }
+    }
+}
+
+/// Whether every pixel of `s1` x `s2` is free, as [`rect_free`], reading only what `k`
+/// cannot vouch for (everything, on a map without generations). Adds the words read to
+/// `tests`.
+#[inline(never)]
+pub fn rect_free_known<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    s1: Span,
+    s2: Span,
+    tests: &mut u32,
+) -> bool {
+    if !m.has_gens() {
+        return rect_free(m, s1, s2, tests);
+    }
+    let [(a0, n0), (a1, n1)] = s1.runs();
+    let (q, rows) = ((s2.lo as u32) & (SIDE - 1), s2.len());
+    k.columns(m, a0, n0, q, rows, tests) && k.columns(m, a1, n1, q, rows, tests)
+}
+
+/// Whether column `i1` is free over `s2`, as [`col_free`], reading only what `k` cannot
+/// vouch for.
+#[inline(never)]
+pub fn col_free_known<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    i1: i32,
+    s2: Span,
+    tests: &mut u32,
+) -> bool {
+    if !m.has_gens() {
+        return col_free(m, i1, s2, tests);
+    }
+    let c = (i1 as u32) & (SIDE - 1);
+    k.columns(m, c, 1, (s2.lo as u32) & (SIDE - 1), s2.len(), tests)
+}
+
 /// Whether rows `b .. b + nb` are free over the runs (`a0`, `n0`) and (`a1`, `n1`).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
@@ -311,9 +567,15 @@ pub struct Grown {
 /// Grows the free rectangle `w.window` (the base, on entry) toward `grow.goal`: one column
 /// (axis 1), then one row (axis 2), alternately (fig. V.5's scans "1", "2", ...), each over
 /// the window's current extent along the other axis, until each axis covers the goal, meets
-/// an obstacle, reaches its reach, or the budget is spent.
+/// an obstacle, reaches its reach, or the budget is spent. Columns go through `k`.
 #[inline(never)]
-pub fn grow<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, tests: &mut u32) {
+pub fn grow<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    grow: &Grow,
+    w: &mut Grown,
+    tests: &mut u32,
+) {
     let start = *tests;
     // Bit `ax` set: that axis is done.
     let mut done = 0u32;
@@ -323,7 +585,7 @@ pub fn grow<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, tests: &mut 
             if *tests - start >= grow.budget {
                 return;
             }
-            done |= step(m, grow, w, ax, tests) << ax;
+            done |= step(m, k, grow, w, ax, tests) << ax;
         }
         ax ^= 1;
     }
@@ -331,7 +593,14 @@ pub fn grow<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, tests: &mut 
 
 /// One column (`ax` 0) or row (`ax` 1) toward the goal. Returns 1 when that axis is done.
 #[inline(never)]
-fn step<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, ax: usize, tests: &mut u32) -> u32 {
+fn step<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    grow: &Grow,
+    w: &mut Grown,
+    ax: usize,
+    tests: &mut u32,
+) -> u32 {
     let g = grow.goal[ax];
     let r = grow.reach[ax];
     let cur = w.window[ax];
@@ -347,7 +616,7 @@ fn step<M: Map + ?Sized>(m: &mut M, grow: &Grow, w: &mut Grown, ax: usize, tests
     }
     let other = w.window[ax ^ 1];
     let free = if ax == 0 {
-        col_free(m, next, other, tests)
+        col_free_known(m, k, next, other, tests)
     } else {
         row_free(m, next, other, tests)
     };

@@ -223,6 +223,77 @@ __vme_cas32:                    /* u32 __vme_cas32(u32 *addr, u32 current, u32 n
     cas.l   %d0, %d1, (%a0)     /* equal: store new; else d0 = value found */
     rts
 
+/* ---- atomic raise of a word: a C-space column's generation (GlobalBus::raise_u32) ----
+ * void __vme_raise32(u32 *addr): *addr += 1 against every other board's CAS.L on the word
+ * (a failed CAS.L leaves the value found in d0; try again from it). */
+    .section .text.__vme_raise32, "ax"
+    .globl __vme_raise32
+__vme_raise32:
+    movea.l 4(%sp), %a0
+    move.l  (%a0), %d0
+1:  move.l  %d0, %d1
+    addq.l  #1, %d1
+    cas.l   %d0, %d1, (%a0)     /* equal: store d0 + 1; else d0 = value found */
+    bne.s   1b
+    rts
+
+/* ---- leading zero words: the free rows of a C-space column (GlobalBus::zero_run) ----
+ * u32 __vme_zero_run(const u32 *addr, u32 n, u32 stride): how many of the n words stride
+ * bytes apart are zero before the first that is not (n when none is). */
+    .section .text.__vme_zero_run, "ax"
+    .globl __vme_zero_run
+__vme_zero_run:
+    movea.l 4(%sp), %a0
+    move.l  8(%sp), %d1
+    move.l  12(%sp), %a1
+    moveq   #0, %d0
+    tst.l   %d1
+    beq.s   9f
+1:  tst.l   (%a0)
+    bne.s   9f
+    adda.l  %a1, %a0
+    addq.l  #1, %d0
+    cmp.l   %d1, %d0
+    bne.s   1b
+9:  rts
+
+/* ---- the reflex's known columns (crates/reflex, window::Known) ----
+ * u32 __reflex_known_hits(const u32 *gens, const Known *k, u32 c, u32 n, u32 q, u32 m):
+ * how many of columns c .. c + n (not wrapping), from c, k vouches for: the generation word
+ * in global RAM (gens[c]) still the one k read the column at (k->gen[c]), and k's run of
+ * free rows (k->start[c], k->len[c]) holding rows q .. q + m (wrapping). Known is repr(C):
+ * gen u32[128] at 0, start u8[128] at 512, len u8[128] at 640 (asserted in the Rust). */
+    .section .text.__reflex_known_hits, "ax"
+    .globl __reflex_known_hits
+__reflex_known_hits:                /* three registers saved: most calls ask one column */
+    movem.l %d2-%d4, -(%sp)         /* 12 bytes: arguments from 16(%sp) */
+    movea.l 16(%sp), %a0            /* gens */
+    movea.l 20(%sp), %a1            /* k */
+    move.l  24(%sp), %d0            /* c */
+    move.l  28(%sp), %d4
+    add.l   %d0, %d4                /* end */
+    move.l  32(%sp), %d2            /* q */
+    move.l  36(%sp), %d3            /* m */
+    cmp.l   %d4, %d0
+    beq.s   9f
+1:  move.l  (%a0,%d0.l*4), %d1
+    cmp.l   (%a1,%d0.l*4), %d1
+    bne.s   9f                      /* the column was written since */
+    moveq   #0, %d1
+    move.b  512(%a1,%d0.l), %d1     /* s */
+    neg.l   %d1
+    add.l   %d2, %d1
+    andi.l  #127, %d1               /* (q - s) mod 128 */
+    add.l   %d3, %d1                /* at most 255: one byte */
+    cmp.b   640(%a1,%d0.l), %d1
+    bhi.s   9f                      /* rows beyond the run (its length l) */
+    addq.l  #1, %d0
+    cmp.l   %d4, %d0
+    bne.s   1b
+9:  sub.l   24(%sp), %d0            /* columns vouched for */
+    movem.l (%sp)+, %d2-%d4
+    rts
+
 /* ---- or of words: a row or column of the C-space map (vme-map's GlobalBus::or_words) ----
  * u32 __vme_or_words(const u32 *addr, u32 n, u32 stride): the or of n words stride bytes
  * apart. Rows (stride 4) take OR.L (An)+ with DBRA, four words a pass; other strides

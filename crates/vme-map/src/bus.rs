@@ -21,6 +21,19 @@ pub trait GlobalBus {
     /// `CAS.L`, an indivisible read-modify-write cycle on the VME bus). Returns the value
     /// found, so the swap happened exactly when the result equals `current`.
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32;
+    /// Raises the word at `off` by one, atomically against every other writer (a `CAS.L`
+    /// loop: a plain read and write could lose another board's raise). Generation counters
+    /// (`layout::CSPACE_GENS`).
+    fn raise_u32(&mut self, off: u32) {
+        let mut v = self.read_u32(off);
+        loop {
+            let found = self.cas_u32(off, v, v.wrapping_add(1));
+            if found == v {
+                return;
+            }
+            v = found;
+        }
+    }
     /// The bitwise or of `n` aligned words from `off`, `stride` bytes apart: a row or a
     /// column of the C-space map tested for obstacles in one call (the reflex's inner loop;
     /// on the 68020 a two-instruction loop in the runtime's assembly).
@@ -100,6 +113,16 @@ pub trait GlobalBus {
             a += 4;
         }
     }
+    /// How many of the `n` aligned words from `off`, `stride` bytes apart, are zero before
+    /// the first that is not (`n` when none is): the free rows of a C-space map column from
+    /// a row (on the 68020 a `TST.L` loop in the runtime's assembly).
+    fn zero_run(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        let mut k = 0;
+        while k < n && self.read_u32(off + k * stride) == 0 {
+            k += 1;
+        }
+        k
+    }
     /// Bit `k` set when the `k`-th of the 32 consecutive aligned words from `off` is
     /// nonzero: 32 pixels of a C-space map row as one word of the planner's bitmap (on the
     /// 68020 a `TST.L (An)+` loop in the runtime's assembly).
@@ -141,11 +164,17 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
         (**self).cas_u32(off, current, new)
     }
+    fn raise_u32(&mut self, off: u32) {
+        (**self).raise_u32(off)
+    }
     fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {
         (**self).or_words(off, n, stride)
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         (**self).nonzero_bits(off)
+    }
+    fn zero_run(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        (**self).zero_run(off, n, stride)
     }
     fn free_rows(&mut self, off0: u32, n0: u32, off1: u32, n1: u32, rows: u32, stride: u32) -> u32 {
         (**self).free_rows(off0, n0, off1, n1, rows, stride)
@@ -285,6 +314,25 @@ impl GlobalBus for MmioGlobal {
         }
         // SAFETY: an aligned, mapped global RAM word; CAS.L touches only that word.
         unsafe { __vme_cas32(Self::ptr::<u32>(off), current, new) }
+    }
+    #[inline(always)]
+    fn zero_run(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        extern "C" {
+            // A `TST.L` / `ADDA.L` loop in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_zero_run(addr: *const u32, n: u32, stride: u32) -> u32;
+        }
+        // SAFETY: `n` aligned, mapped global RAM words `stride` bytes apart, only read.
+        unsafe { __vme_zero_run(Self::ptr::<u32>(off), n, stride) }
+    }
+    #[inline(always)]
+    fn raise_u32(&mut self, off: u32) {
+        extern "C" {
+            // A `CAS.L` loop in the runtime's assembly (crates/rt/asm/rt.S): the compiled
+            // loop branched on the flags of a register copy (docs/toolchain.md, class 1).
+            fn __vme_raise32(addr: *mut u32);
+        }
+        // SAFETY: an aligned, mapped global RAM word; the loop touches only that word.
+        unsafe { __vme_raise32(Self::ptr::<u32>(off)) }
     }
     #[inline(always)]
     fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {

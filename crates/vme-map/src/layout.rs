@@ -17,7 +17,7 @@ use crate::GLOBAL_RAM_SIZE;
 /// Value of the header's magic word: ASCII "NW87" (Newman 1987).
 pub const MAGIC: u32 = 0x4E57_3837;
 /// Version of this layout; bumped by every incompatible change.
-pub const LAYOUT_VERSION: u32 = 4;
+pub const LAYOUT_VERSION: u32 = 5;
 
 /// Header: magic word (written by the host at power-up).
 pub const HEADER_MAGIC: u32 = 0x0000;
@@ -212,6 +212,31 @@ pub const CSPACE_STRIPES: u32 = 0x0000_0C00;
 /// Bytes of the stripe layer.
 pub const CSPACE_STRIPES_BYTES: u32 = CSPACE_SIDE * CSPACE_COUNTERS;
 
+/// C-space column generations: one word per theta1 column (writers: C-space boards, each
+/// raise with `CAS.L`). Every write to a column's map words or its stripe word is followed
+/// by one raise of the column's word ([`raise_column_gen`]), so a reader that read the
+/// word, then the column, and later finds the word unchanged knows the column unchanged
+/// since (up to a write in progress, whose raise has not come yet). The reflex keeps what
+/// it read of each column and reads again only the columns whose word moved.
+pub const CSPACE_GENS: u32 = 0x0000_0E00;
+/// Bytes of [`CSPACE_GENS`].
+pub const CSPACE_GENS_BYTES: u32 = CSPACE_SIDE * 4;
+
+/// Offset of column `i1`'s generation word.
+#[inline(always)]
+pub const fn cspace_gen(i1: u32) -> u32 {
+    CSPACE_GENS + 4 * (i1 % CSPACE_SIDE)
+}
+
+/// Raises column `i1`'s generation word by one with `CAS.L` ([`crate::GlobalBus::raise_u32`]:
+/// any number of C-space boards may write a column; a plain read and write could lose a
+/// raise to another board's and bring the word back to a value a reader saw). Call after
+/// the column's words are written.
+#[inline(always)]
+pub fn raise_column_gen<G: crate::GlobalBus + ?Sized>(g: &mut G, i1: u32) {
+    g.raise_u32(cspace_gen(i1));
+}
+
 /// First log ring.
 pub const LOG_RINGS: u32 = 0x0002_0000;
 /// Bytes per board's log ring.
@@ -275,7 +300,7 @@ const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Re
 }
 
 /// Every region of global RAM in address order.
-pub const LAYOUT: [Region; 17] = [
+pub const LAYOUT: [Region; 18] = [
     Region {
         name: "header",
         offset: HEADER_MAGIC,
@@ -337,6 +362,13 @@ pub const LAYOUT: [Region; 17] = [
         seqlock: false,
     },
     Region {
+        name: "cspace_gens",
+        offset: CSPACE_GENS,
+        size: CSPACE_GENS_BYTES,
+        writer: Writer::CspaceBoards,
+        seqlock: false,
+    },
+    Region {
         name: "cspace_map",
         offset: CSPACE_MAP,
         size: CSPACE_MAP_BYTES,
@@ -392,7 +424,7 @@ const _: () = assert!(SeqLock::<HostCommand>::SIZE == 20);
 const _: () = assert!(SeqLock::<SensingConfig>::SIZE == 20);
 const _: () = assert!(SeqLock::<SensingDrift>::SIZE == 24);
 const _: () = assert!(SeqLock::<RawTable>::SIZE == 136);
-const _: () = assert!(SeqLock::<ReflexStatus>::SIZE == 24);
+const _: () = assert!(SeqLock::<ReflexStatus>::SIZE == 28);
 const _: () = assert!(WORK_ENTRY_BYTES == 32);
 const _: () = assert!(CSPACE_MAP_BYTES == 0x1_0000);
 const _: () = assert!(LOG_ENTRIES_OFFSET + LOG_ENTRIES * LOG_ENTRY_BYTES <= LOG_RING_STRIDE);

@@ -380,6 +380,10 @@ record! {
         pub window: u32,
         /// Pixel words read in the pass.
         pub tests: u32,
+        /// Pixels the pass vouched for without reading them: rows of columns read free in
+        /// an earlier pass whose generation word has not moved since
+        /// (`layout::CSPACE_GENS`).
+        pub known: u32,
         /// Servo-clock time since the previous pass.
         pub dt_us: u32,
     }
