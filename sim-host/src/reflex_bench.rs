@@ -5,8 +5,10 @@
 //!   keeps fresh (servo state, C-space heartbeat, object frames), in the cases of thesis
 //!   ch. V section 7: at rest; after 42 ms of full acceleration of both links (fig. V.5,
 //!   11.5 and 40.3 rad/s: the thesis's 214 pixels in 4.4 ms); at the thesis's expected top
-//!   speeds (29 and 55 rad/s, arrest region 32 x 32 pixels: the 146 kHz it needed); and
-//!   among obstacles. Free space is the worst case (thesis: the window is largest there).
+//!   speeds (29 and 55 rad/s, arrest region 32 x 32 pixels: the 146 kHz it needed), held
+//!   and with the angles advancing; among obstacles, static and with one redrawn every
+//!   10 ms (the known columns read again); and escaping. Free space is the worst case
+//!   (thesis: the window is largest there).
 //! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
 //!   (native mode): the reflex must not slow the arm.
 
@@ -26,8 +28,11 @@ pub struct ImageCase {
     pub passes: u64,
     /// Mean cycles per pass.
     pub cycles_per_pass: f64,
-    /// Mean pixel words tested per pass.
+    /// Mean pixel words read per pass.
     pub tests_per_pass: f64,
+    /// Mean pixels vouched for per pass without a read (columns whose generation has not
+    /// moved since the reflex read them: `reflex::window::Known`).
+    pub known_per_pass: f64,
 }
 
 impl ImageCase {
@@ -35,8 +40,13 @@ impl ImageCase {
     pub fn rate_hz(&self) -> f64 {
         crate::emu::CPU_HZ as f64 / self.cycles_per_pass
     }
-    /// Pixel tests per second at 16.7 MHz (the thesis's 48,000).
+    /// Pixels checked per second at 16.7 MHz, read or vouched for (the thesis's 48,000
+    /// tests, each a pixel read).
     pub fn pixels_per_s(&self) -> f64 {
+        (self.tests_per_pass + self.known_per_pass) * self.rate_hz()
+    }
+    /// Pixel words read per second at 16.7 MHz.
+    pub fn reads_per_s(&self) -> f64 {
         self.tests_per_pass * self.rate_hz()
     }
 }
@@ -115,6 +125,13 @@ struct Spec {
     disks: &'static [(i32, i32, i32)],
     /// The sensing board flags the obstacles moving.
     moving: bool,
+    /// The arm really moves: its angles advance at `omega` between the host's updates
+    /// (otherwise every pass sees the same state).
+    advance: bool,
+    /// Every this many ms one of the obstacles is redrawn 1 mm away (back and forth, in
+    /// turn) through the C-space boards' canvas, raising its columns' generations as a
+    /// C-space job does (0: the map never changes).
+    redraw_ms: u32,
 }
 
 /// Runs the reflex image for `ms` with the arm at `c.theta` turning at `c.omega` (held
@@ -127,6 +144,8 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
         omega,
         disks,
         moving,
+        advance,
+        redraw_ms,
     } = *c;
     let mut sys = System::power_up(dir, &[BoardId::Reflex]).map_err(|e| e.to_string())?;
     let mut table = ObjectTable::default();
@@ -164,7 +183,9 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
     }
     let step_ms = 0.25;
     let steps = (ms / step_ms) as u32;
-    let (mut passes, mut tests_sum, mut samples) = (0u64, 0f64, 0u64);
+    let (mut passes, mut tests_sum, mut known_sum, mut samples) = (0u64, 0f64, 0f64, 0u64);
+    let redraw_every = (redraw_ms as f64 / step_ms) as u32;
+    let mut redraws = 0u32;
     let mut h0 = None;
     let mut feed = Feed {
         theta,
@@ -173,6 +194,38 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
         k: 0,
     };
     for k in 0..steps {
+        if advance {
+            for (th, w) in feed.theta.iter_mut().zip(omega) {
+                *th = (*th + w * step_ms * 1e-3).rem_euclid(2.0 * std::f64::consts::PI);
+            }
+        }
+        if redraw_every > 0 && k % redraw_every == redraw_every - 1 {
+            // Obstacle `redraws % n` moves 1 mm along x, out on even turns and back on odd.
+            let n = disks.len() as u32;
+            let (i, turn) = ((redraws % n) as usize, redraws / n);
+            let (x, y, r) = disks[i];
+            let (from, to) = if turn % 2 == 0 {
+                (x, x + 1)
+            } else {
+                (x + 1, x)
+            };
+            let disk = |x: i32| cspace::Disk {
+                x_um: x * 1000,
+                y_um: y * 1000,
+                r_um: r * 1000,
+            };
+            let mut g = sys.bus();
+            let mut canvas = cspace::BusCanvas(&mut g);
+            let (old, new) = (cspace::images(&disk(from)), cspace::images(&disk(to)));
+            let (old, new) = (
+                old.map_err(|e| format!("{e:?}"))?,
+                new.map_err(|e| format!("{e:?}"))?,
+            );
+            // New first, then the old erased (the boards' order: thesis lines 1199-1210).
+            cspace::apply(&new, &mut canvas, cspace::Op::Draw);
+            cspace::apply(&old, &mut canvas, cspace::Op::Erase);
+            redraws += 1;
+        }
         feed.apply(&mut sys.bus());
         sys.run_ms(step_ms);
         // Measure after the reflex has had half a second to get going.
@@ -182,6 +235,7 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
             passes = hb.wrapping_sub(hb0) as u64;
             if let Ok((st, _)) = vme_map::REFLEX_STATUS.read(&mut sys.bus()) {
                 tests_sum += st.tests as f64;
+                known_sum += st.known as f64;
                 samples += 1;
             }
         }
@@ -209,6 +263,7 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
         passes,
         cycles_per_pass: (sys.now - c0) as f64 / passes.max(1) as f64,
         tests_per_pass: tests_sum / samples.max(1) as f64,
+        known_per_pass: known_sum / samples.max(1) as f64,
     })
 }
 
@@ -238,6 +293,8 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             omega: still,
             disks: &[],
             moving: false,
+            advance: false,
+            redraw_ms: 0,
         },
         Spec {
             name: "fig. V.5: 42 ms of full acceleration (11.5, 40.3 rad/s)",
@@ -245,6 +302,8 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             omega: [11.5, 40.3],
             disks: &[],
             moving: false,
+            advance: false,
+            redraw_ms: 0,
         },
         Spec {
             name: "top speed (29, 55 rad/s): arrest region 32 x 32 pixels",
@@ -252,6 +311,17 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             omega: [29.0, 55.0],
             disks: &[],
             moving: false,
+            advance: false,
+            redraw_ms: 0,
+        },
+        Spec {
+            name: "top speed, the arm moving through free space",
+            theta: [0.3, 0.4],
+            omega: [29.0, 55.0],
+            disks: &[],
+            moving: false,
+            advance: true,
+            redraw_ms: 0,
         },
         Spec {
             name: "among 4 obstacles, moving (5, 10 rad/s)",
@@ -259,6 +329,17 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             omega: [5.0, 10.0],
             disks: &CLUTTER,
             moving: false,
+            advance: false,
+            redraw_ms: 0,
+        },
+        Spec {
+            name: "among 4 obstacles, one redrawn every 10 ms (5, 10 rad/s)",
+            theta: [2.0, -0.5],
+            omega: [5.0, 10.0],
+            disks: &CLUTTER,
+            moving: false,
+            advance: false,
+            redraw_ms: 10,
         },
         Spec {
             name: "escaping: the arm inside a moving obstacle, at rest",
@@ -266,6 +347,8 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             omega: still,
             disks: &CLUTTER,
             moving: true,
+            advance: false,
+            redraw_ms: 0,
         },
         Spec {
             name: "escaping: the arm 15 mm off a moving obstacle, at rest",
@@ -273,6 +356,8 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             omega: still,
             disks: &CLUTTER,
             moving: true,
+            advance: false,
+            redraw_ms: 0,
         },
     ];
     cases
@@ -365,21 +450,27 @@ pub fn report(dir: &Path) -> Result<String, String> {
     );
     let _ = writeln!(
         r,
-        "{:<58} {:>8} {:>10} {:>9} {:>10} {:>13}",
-        "case", "passes", "cycles", "tests", "rate Hz", "pixels/s"
+        "{:<58} {:>7} {:>8} {:>7} {:>7} {:>8} {:>11} {:>10}",
+        "case", "passes", "cycles", "read", "known", "rate Hz", "checked/s", "read/s"
     );
     for c in image_cases(dir)? {
         let _ = writeln!(
             r,
-            "{:<58} {:>8} {:>10.0} {:>9.1} {:>10.0} {:>13.0}",
+            "{:<58} {:>7} {:>8.0} {:>7.1} {:>7.1} {:>8.0} {:>11.0} {:>10.0}",
             c.name,
             c.passes,
             c.cycles_per_pass,
             c.tests_per_pass,
+            c.known_per_pass,
             c.rate_hz(),
-            c.pixels_per_s()
+            c.pixels_per_s(),
+            c.reads_per_s()
         );
     }
+    let _ = writeln!(
+        r,
+        "read: pixel words read a pass; known: pixels vouched for without a read (columns whose generation has not moved since read); checked/s: both, per second"
+    );
     let _ = writeln!(
         r,
         "thesis: 214 pixels in 4.4 ms (48,000 pixels/s, subgoals at 200-600 Hz); 146,000 pixels/s needed for full speed; targets: >= 300,000 pixels/s, >= 1 kHz"

@@ -194,9 +194,28 @@ fn the_cspace_image_moves_images_like_draw_then_erase() {
         assert_eq!(ret, 0, "{old:?} -> {new:?}");
         let mut host = cspace::Memory::default();
         cspace::apply(&a, &mut host.canvas(), cspace::Op::Draw);
+        let drawn = host.clone();
         cspace::apply(&c, &mut host.canvas(), cspace::Op::Draw);
         cspace::apply(&a, &mut host.canvas(), cspace::Op::Erase);
         assert_map_is(&global, &host, &format!("{old:?} -> {new:?}"));
+        // Every column the draw wrote, and again every column the move changed, had its
+        // generation raised after (the reflex reads again only columns whose generation
+        // moved): at least once for each.
+        let column = |m: &cspace::Memory, c: usize| {
+            let mut w: Vec<u32> = (0..128).map(|r| m.map[r * 128 + c]).collect();
+            w.push(m.stripes[c]);
+            w
+        };
+        for c in 0..128 {
+            let o = (vme_map::layout::cspace_gen(c as u32)) as usize;
+            let gen = u32::from_be_bytes([global[o], global[o + 1], global[o + 2], global[o + 3]]);
+            let wrote = column(&drawn, c).iter().any(|&w| w != 0) as u32;
+            let changed = (column(&drawn, c) != column(&host, c)) as u32;
+            assert!(
+                gen >= wrote + changed,
+                "{old:?} -> {new:?}: column {c} raised {gen} times, drawn {wrote}, changed {changed}"
+            );
+        }
         moved += 1;
     }
     assert!(moved > 100, "only {moved} moves had images");
