@@ -528,15 +528,19 @@ pub fn col_free<M: Map + ?Sized>(m: &mut M, i1: i32, s2: Span, tests: &mut u32) 
     acc == 0
 }
 
-/// Whether row `i2` is free over `s1`.
+/// Whether row `i2`'s map words over `s1` are all zero. The stripe words of `s1` are not
+/// read: `s1` is the growing window's extent along theta1, and each of its columns had its
+/// stripe word read (or vouched for, [`Known`]) when it joined the window this pass, by
+/// [`rect_free`] / [`rect_free_known`] or [`col_free`] / [`col_free_known`] (reading them
+/// again for every row was half the words a growing window read).
 #[inline(never)]
-pub fn row_free<M: Map + ?Sized>(m: &mut M, i2: i32, s1: Span, tests: &mut u32) -> bool {
+pub fn window_row_free<M: Map + ?Sized>(m: &mut M, i2: i32, s1: Span, tests: &mut u32) -> bool {
     let r = (i2 as u32) & (SIDE - 1);
     let [(a0, n0), (a1, n1)] = s1.runs();
-    *tests += 2 * (n0 + n1);
-    let mut acc = m.stripes_or(a0, n0) | m.row_or(r, a0, n0);
+    *tests += n0 + n1;
+    let mut acc = m.row_or(r, a0, n0);
     if n1 > 0 {
-        acc |= m.stripes_or(a1, n1) | m.row_or(r, a1, n1);
+        acc |= m.row_or(r, a1, n1);
     }
     acc == 0
 }
@@ -618,7 +622,7 @@ fn step<M: Map + ?Sized>(
     let free = if ax == 0 {
         col_free_known(m, k, next, other, tests)
     } else {
-        row_free(m, next, other, tests)
+        window_row_free(m, next, other, tests)
     };
     if !free {
         w.blocked[ax] = true;
