@@ -7,7 +7,7 @@
 //!
 //! * [`bus`]: the [`GlobalBus`] trait through which every board reaches global RAM (volatile
 //!   MMIO on the real board, a byte array in tests and in the simulator).
-//! * [`record`]: fixed-size records of 32-bit words published under a sequence lock.
+//! * [`mod@record`]: fixed-size records of 32-bit words published under a sequence lock.
 //! * [`layout`]: the offsets, asserted at compile time, and the table `docs/memory-map.md`
 //!   is checked against.
 //! * [`board`]: board identities, heartbeats, status words and fault records.

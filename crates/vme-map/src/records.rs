@@ -345,7 +345,7 @@ pub mod planner_mode {
     pub const FREE: u32 = 1;
     /// Following an obstacle wall: the request is the next cell along it.
     pub const WALL: u32 = 2;
-    /// The goal cannot be reached: holding where the arm was ([`PlannerGoal::reason`] says why).
+    /// The goal cannot be reached: holding where the arm was ([`super::PlannerGoal::reason`] says why).
     pub const UNREACHABLE: u32 = 3;
     /// No servo state this cycle: the last request again.
     pub const HOLD: u32 = 4;
