@@ -265,33 +265,38 @@ __vme_zero_run:
  * gen u32[128] at 0, start u8[128] at 512, len u8[128] at 640 (asserted in the Rust). */
     .section .text.__reflex_known_hits, "ax"
     .globl __reflex_known_hits
-__reflex_known_hits:                /* three registers saved: most calls ask one column */
-    movem.l %d2-%d4, -(%sp)         /* 12 bytes: arguments from 16(%sp) */
-    movea.l 16(%sp), %a0            /* gens */
-    movea.l 20(%sp), %a1            /* k */
-    move.l  24(%sp), %d0            /* c */
-    move.l  28(%sp), %d4
-    add.l   %d0, %d4                /* end */
-    move.l  32(%sp), %d2            /* q */
-    move.l  36(%sp), %d3            /* m */
-    cmp.l   %d4, %d0
-    beq.s   9f
-1:  move.l  (%a0,%d0.l*4), %d1
-    cmp.l   (%a1,%d0.l*4), %d1
-    bne.s   9f                      /* the column was written since */
-    moveq   #0, %d1
-    move.b  512(%a1,%d0.l), %d1     /* s */
-    neg.l   %d1
-    add.l   %d2, %d1
-    andi.l  #127, %d1               /* (q - s) mod 128 */
-    add.l   %d3, %d1                /* at most 255: one byte */
-    cmp.b   640(%a1,%d0.l), %d1
-    bhi.s   9f                      /* rows beyond the run (its length l) */
-    addq.l  #1, %d0
-    cmp.l   %d4, %d0
-    bne.s   1b
-9:  sub.l   24(%sp), %d0            /* columns vouched for */
-    movem.l (%sp)+, %d2-%d4
+__reflex_known_hits:
+    movem.l %d2-%d5/%a2-%a3, -(%sp) /* 24 bytes: arguments from 28(%sp) */
+    movea.l 28(%sp), %a0            /* gens */
+    movea.l 32(%sp), %a1            /* k */
+    move.l  36(%sp), %d0            /* c */
+    move.l  44(%sp), %d2            /* q */
+    move.l  48(%sp), %d3            /* m: at most 128, so (q - s) mod 128 + m fits a byte */
+    lea     512(%a1,%d0.l), %a2     /* &k->start[c] */
+    lea     640(%a1,%d0.l), %a3     /* &k->len[c] */
+    lsl.l   #2, %d0
+    adda.l  %d0, %a0                /* &gens[c] */
+    adda.l  %d0, %a1                /* &k->gen[c] */
+    moveq   #127, %d5
+    move.l  40(%sp), %d4            /* n (at most 128) */
+    moveq   #0, %d0
+    subq.l  #1, %d4                 /* DBRA's count: n - 1 .. 0 */
+    bmi.s   9f                      /* n = 0 */
+1:  cmpm.l  (%a0)+, (%a1)+
+    bne.s   8f                      /* the column was written since */
+    move.b  %d2, %d1
+    sub.b   (%a2)+, %d1             /* q - s, mod 256 */
+    and.b   %d5, %d1                /* mod 128 */
+    add.b   %d3, %d1                /* + m: at most 255 */
+    cmp.b   (%a3)+, %d1
+    bhi.s   8f                      /* rows beyond the run (its length l) */
+    dbra    %d4, 1b
+    move.l  40(%sp), %d0            /* every column vouched for */
+    bra.s   9f
+8:  move.l  40(%sp), %d0
+    subq.l  #1, %d0
+    sub.l   %d4, %d0                /* columns before this one: n - 1 - count */
+9:  movem.l (%sp)+, %d2-%d5/%a2-%a3
     rts
 
 /* ---- or of words: a row or column of the C-space map (vme-map's GlobalBus::or_words) ----
