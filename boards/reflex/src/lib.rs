@@ -151,11 +151,11 @@ impl Board {
         // pass cost the 68020 thousands of cycles of memset and memcpy).
         let inp = &mut self.input;
         // Written in place (a value built first and assigned cost a `memcpy` call a pass).
-        inp.servo = if servo_ok {
-            Some(ServoView::from_words(&self.servo_w))
+        if servo_ok {
+            ServoView::fill(&mut inp.servo, &self.servo_w);
         } else {
-            None
-        };
+            inp.servo = None;
+        }
         inp.goal = goal;
         inp.health.objects_frame = self.objects_w[0];
         inp.health.objects_torn = !ok;

@@ -174,6 +174,30 @@ impl ServoView {
             loops: w[9],
         }
     }
+
+    /// `slot` set to the view of the servo state's words `w` in place (a view returned by
+    /// value and moved into the `Option` cost the 68020 a `memcpy` a pass).
+    #[inline(never)]
+    pub fn fill(
+        slot: &mut Option<ServoView>,
+        w: &[u32; <vme_map::records::ServoState as vme_map::record::Record>::WORDS as usize],
+    ) {
+        let v = slot.get_or_insert(ServoView::ZERO);
+        v.theta_urad = [w[0] as i32, w[1] as i32];
+        v.omega_urad_s = [w[2] as i32, w[3] as i32];
+        v.arrest_urad = [w[4] as i32, w[5] as i32];
+        v.t_us = w[8];
+        v.loops = w[9];
+    }
+
+    /// All zero (the slot [`ServoView::fill`] starts from).
+    pub const ZERO: ServoView = ServoView {
+        theta_urad: [0; 2],
+        omega_urad_s: [0; 2],
+        arrest_urad: [0; 2],
+        t_us: 0,
+        loops: 0,
+    };
 }
 
 /// Where the goal comes from this pass.
@@ -371,6 +395,9 @@ pub struct Reflex {
     scratch: escape::Scratch,
     /// The runs of rows read free in earlier passes, by column (`window::Known`).
     known: window::Known,
+    /// What a moving obstacle's border covers in [`REACT_US`], angle units (from the
+    /// configuration, once: a product a pass before).
+    react_u: i32,
     /// The wand position the goal was last computed from.
     wand_um: [i32; 2],
     /// The arrest points of the last passes: a hold for an input that went quiet holds at
@@ -414,6 +441,7 @@ impl Reflex {
             evasion: evade::Scratch::new(),
             scratch: escape::Scratch::new(),
             known: window::Known::new(),
+            react_u: fx::host_mul_shr(cfg.border_px_s * PIX_U, REACT_US * US_TO_S_Q32, 32),
             wand_um: [0; 2],
             log: arrest_log::ArrestLog::new(),
         }
@@ -612,7 +640,7 @@ impl Reflex {
         // Among moving obstacles (the sensing board flags them) the arm also keeps the
         // distance they cover in the time it takes to react ([`REACT_US`]), and evades
         // once they come closer.
-        let wide = fx::mul_shr(border_u_s, REACT_US * US_TO_S_Q32, 32) & -(moving as i32);
+        let wide = self.react_u & -(moving as i32);
         // Built by `prepare` in place, spans and all (two `Axis::default()` filled after
         // cost two `memset` calls a pass on the 68020).
         let m = Margins {
@@ -913,12 +941,14 @@ fn prepare(i: usize, sv: &ServoView, prev: &[i32; 2], goal: &[i32; 2], m: &Margi
 
 impl Axis {
     /// The goal with the margin it needs, in pixels.
+    #[inline(always)]
     fn goal_span(&self, keep: i32) -> Span {
         Span::of_units(self.goal - keep, self.goal + keep)
     }
 
     /// The farthest the window may grow each way: the arrest region and the lookahead depth
     /// beyond it (the thesis's window plus twice what the arrest point may advance per pass).
+    #[inline(always)]
     fn reach(&self) -> Span {
         let d = DEPTH_PX + 2 * ((self.adv + PIX_U - 1) >> 8);
         Span {
