@@ -100,16 +100,7 @@ impl Board {
                 obstacles: [reflex::ObstacleView::NONE; reflex::OBSTACLES],
             },
             entry: 0,
-            out: reflex::Output {
-                subgoal_urad: None,
-                flags: 0,
-                goal_urad: [0; 2],
-                window: [(0, 0); 2],
-                tests: 0,
-                known: 0,
-                dt_us: 0,
-                new_fault: None,
-            },
+            out: reflex::Output::EMPTY,
         }
     }
 

@@ -166,13 +166,22 @@ impl ServoView {
     pub fn from_words(
         w: &[u32; <vme_map::records::ServoState as vme_map::record::Record>::WORDS as usize],
     ) -> Self {
-        ServoView {
-            theta_urad: [w[0] as i32, w[1] as i32],
-            omega_urad_s: [w[2] as i32, w[3] as i32],
-            arrest_urad: [w[4] as i32, w[5] as i32],
-            t_us: w[8],
-            loops: w[9],
-        }
+        let mut v = ServoView::ZERO;
+        v.set(w);
+        v
+    }
+
+    /// The fields from the servo state record's words (the one mapping of them).
+    #[inline(always)]
+    fn set(
+        &mut self,
+        w: &[u32; <vme_map::records::ServoState as vme_map::record::Record>::WORDS as usize],
+    ) {
+        self.theta_urad = [w[0] as i32, w[1] as i32];
+        self.omega_urad_s = [w[2] as i32, w[3] as i32];
+        self.arrest_urad = [w[4] as i32, w[5] as i32];
+        self.t_us = w[8];
+        self.loops = w[9];
     }
 
     /// `slot` set to the view of the servo state's words `w` in place (a view returned by
@@ -182,12 +191,7 @@ impl ServoView {
         slot: &mut Option<ServoView>,
         w: &[u32; <vme_map::records::ServoState as vme_map::record::Record>::WORDS as usize],
     ) {
-        let v = slot.get_or_insert(ServoView::ZERO);
-        v.theta_urad = [w[0] as i32, w[1] as i32];
-        v.omega_urad_s = [w[2] as i32, w[3] as i32];
-        v.arrest_urad = [w[4] as i32, w[5] as i32];
-        v.t_us = w[8];
-        v.loops = w[9];
+        slot.get_or_insert(ServoView::ZERO).set(w);
     }
 
     /// All zero (the slot [`ServoView::fill`] starts from).
@@ -306,7 +310,20 @@ pub struct Output {
 }
 
 impl Output {
-    /// Back to [`Output::default`], field by field (an assignment of the default value
+    /// No subgoal, nothing tested, no fault: [`Output::default`] as a constant (the boards
+    /// build theirs in `const fn`s).
+    pub const EMPTY: Output = Output {
+        subgoal_urad: None,
+        flags: 0,
+        goal_urad: [0; 2],
+        window: [(0, 0); 2],
+        tests: 0,
+        known: 0,
+        dt_us: 0,
+        new_fault: None,
+    };
+
+    /// Back to [`Output::EMPTY`], field by field (an assignment of the whole value
     /// compiled to a `memset` call on the 68020).
     #[inline(never)]
     pub fn clear(&mut self) {
