@@ -1471,6 +1471,26 @@ __cspace_columns:
  * the counters the new adds, those the old drops). Returns the records written, or cap + 1
  * when they do not fit. The same records as the host's walk by cursors, which the system
  * tests compare it with through the map. */
+/* WREC col, kind, c0: a record of the whole column whose raster::Column is at (col):
+ * kind | column << 8 (1: only the new image has it, 2: only the old), its index in that
+ * image's columns (WC less the image's first column, at c0(%a6)), no rows, no counters.
+ * To .Lwfull when the records are at the cap. Uses d3. */
+.macro WREC col, kind, c0
+    cmp.l   36(%a6), %d7
+    bcc     .Lwfull
+    move.l  (\col), %d3
+    lsl.l   #8, %d3
+    addq.l  #\kind, %d3
+    move.l  %d3, (%a3)+
+    move.l  WC(%a6), %d3
+    sub.l   \c0(%a6), %d3
+    move.l  %d3, (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    clr.l   (%a3)+
+    addq.l  #1, %d7
+.endm
+
     .section .text.__cspace_walk, "ax"
     .globl __cspace_walk
     .set    WC, -4              /* column */
@@ -1521,29 +1541,12 @@ __cspace_walk:
     move.l  %a0, %d1            /* the old image's alone, or neither */
     tst.l   %d1
     beq     .Lwnext
-    move.l  WC(%a6), %d1
-    sub.l   12(%a6), %d1
-    moveq   #2, %d2
-    move.l  %a0, %a4
-    bra.s   3f
+    WREC    %a0, 2, 12
+    bra     .Lwnext
 2:  move.l  %a0, %d1
     tst.l   %d1
     bne.s   4f
-    move.l  WC(%a6), %d1        /* the new image's alone */
-    sub.l   24(%a6), %d1
-    moveq   #1, %d2
-    move.l  %a1, %a4
-3:  cmp.l   36(%a6), %d7
-    bcc     .Lwfull
-    move.l  (%a4), %d3
-    lsl.l   #8, %d3
-    or.l    %d2, %d3
-    move.l  %d3, (%a3)+
-    move.l  %d1, (%a3)+
-    clr.l   (%a3)+
-    clr.l   (%a3)+
-    clr.l   (%a3)+
-    addq.l  #1, %d7
+    WREC    %a1, 1, 24          /* the new image's alone */
     bra     .Lwnext
 4:  /* both: nothing when the columns are the same */
     move.l  %a0, %a2
@@ -1566,32 +1569,8 @@ __cspace_walk:
     addq.l  #WNEAR, %d1
     cmp.l   %d2, %d1
     bls.s   12f
-11: cmp.l   36(%a6), %d7        /* the new column whole, then the old one */
-    bcc     .Lwfull
-    move.l  (%a1), %d3
-    lsl.l   #8, %d3
-    addq.l  #1, %d3
-    move.l  %d3, (%a3)+
-    move.l  WC(%a6), %d3
-    sub.l   24(%a6), %d3
-    move.l  %d3, (%a3)+
-    clr.l   (%a3)+
-    clr.l   (%a3)+
-    clr.l   (%a3)+
-    addq.l  #1, %d7
-    cmp.l   36(%a6), %d7
-    bcc     .Lwfull
-    move.l  (%a0), %d3
-    lsl.l   #8, %d3
-    addq.l  #2, %d3
-    move.l  %d3, (%a3)+
-    move.l  WC(%a6), %d3
-    sub.l   12(%a6), %d3
-    move.l  %d3, (%a3)+
-    clr.l   (%a3)+
-    clr.l   (%a3)+
-    clr.l   (%a3)+
-    addq.l  #1, %d7
+11: WREC    %a1, 1, 24          /* the new column whole, then the old one */
+    WREC    %a0, 2, 12
     bra     .Lwnext
 12:
     /* the breakpoints of both: first, first + min(lower_rows, rows),
