@@ -236,6 +236,7 @@ impl Span {
     }
 
     /// Pixels in the span, at most the whole axis.
+    #[inline(always)]
     pub fn len(self) -> u32 {
         ((self.hi - self.lo + 1) as u32).min(SIDE)
     }
@@ -247,6 +248,7 @@ impl Span {
 
     /// The span as at most two runs of map indices that do not wrap: (start, count) each,
     /// the second of count 0 when one suffices.
+    #[inline(always)]
     pub fn runs(self) -> [(u32, u32); 2] {
         let n = self.len();
         let start = (self.lo as u32) & (SIDE - 1);
@@ -586,13 +588,108 @@ pub fn grow<M: Map + ?Sized>(
     let mut ax = 0usize;
     while done != 3 {
         if done & (1 << ax) == 0 {
-            if *tests - start >= grow.budget {
+            let used = *tests - start;
+            if used >= grow.budget {
                 return;
             }
-            done |= step(m, k, grow, w, ax, tests) << ax;
+            // Once the columns are done the rows' extent along theta1 stays: the rows left
+            // go as one run (a step a row cost the 68020 ~400 cycles besides the reads).
+            done |= if done == 1 {
+                rows_run(m, grow, w, grow.budget - used, tests)
+            } else {
+                step(m, k, grow, w, ax, tests)
+            } << ax;
         }
         ax ^= 1;
     }
+}
+
+/// The rows [`step`] would add one by one, toward the goal, once the columns are done:
+/// as many as the goal, the reach, the axis and the budget left (`left` words) allow, read
+/// as one run. Returns 1 when the rows are done (blocked, or nothing to add), as [`step`].
+#[inline(never)]
+fn rows_run<M: Map + ?Sized>(
+    m: &mut M,
+    grow: &Grow,
+    w: &mut Grown,
+    left: u32,
+    tests: &mut u32,
+) -> u32 {
+    // The direction as a type: one branch on it (a second one, on the compare's flags
+    // kept across a register copy, was miscompiled: docs/toolchain.md class 1).
+    if grow.goal[1].hi > w.window[1].hi {
+        rows_toward::<M, true>(m, grow, w, left, tests)
+    } else {
+        rows_toward::<M, false>(m, grow, w, left, tests)
+    }
+}
+
+/// [`rows_run`] upward (`UP`) or downward.
+#[inline(never)]
+fn rows_toward<M: Map + ?Sized, const UP: bool>(
+    m: &mut M,
+    grow: &Grow,
+    w: &mut Grown,
+    left: u32,
+    tests: &mut u32,
+) -> u32 {
+    let (g, r, cur) = (grow.goal[1], grow.reach[1], w.window[1]);
+    // Rows toward the goal within the reach, and within the axis.
+    let (to_goal, to_reach) = if UP {
+        (g.hi - cur.hi, r.hi - cur.hi)
+    } else {
+        (cur.lo - g.lo, cur.lo - r.lo)
+    };
+    let in_axis = SIDE as i32 - (cur.hi - cur.lo + 1);
+    let width = w.window[0].len();
+    let mut n = to_goal.min(to_reach).min(in_axis);
+    if n <= 0 {
+        // Covered, at the reach or the axis full: done, as a step decides.
+        return 1;
+    }
+    // Row `j` (from 0) is read while fewer than `left` words were read before it. Where
+    // the budget binds (rarely), one row: the caller asks again while budget is left. (A
+    // division here was miscompiled, llvm/llvm-project#224186, and costs a call.)
+    if (n as u32 - 1) * width >= left {
+        n = 1;
+    }
+    let n = n as u32;
+    let [(a0, n0), (a1, n1)] = w.window[0].runs();
+    let free = if UP {
+        // At most two runs of rows that do not wrap.
+        let b = ((cur.hi + 1) as u32) & (SIDE - 1);
+        let first = n.min(SIDE - b);
+        let mut f = m.free_rows(b, first, a0, n0, a1, n1);
+        if f == first && n > first {
+            f += m.free_rows(0, n - first, a0, n0, a1, n1);
+        }
+        f
+    } else {
+        let mut f = 0;
+        while f < n {
+            let b = ((cur.lo - 1 - f as i32) as u32) & (SIDE - 1);
+            let mut acc = m.row_or(b, a0, n0);
+            if n1 > 0 {
+                acc |= m.row_or(b, a1, n1);
+            }
+            if acc != 0 {
+                break;
+            }
+            f += 1;
+        }
+        f
+    };
+    *tests += width * (free + 1).min(n);
+    if UP {
+        w.window[1].hi += free as i32;
+    } else {
+        w.window[1].lo -= free as i32;
+    }
+    if free < n {
+        w.blocked[1] = true;
+        return 1;
+    }
+    0
 }
 
 /// One column (`ax` 0) or row (`ax` 1) toward the goal. Returns 1 when that axis is done.
@@ -634,4 +731,80 @@ fn step<M: Map + ?Sized>(
         w.window[ax].lo = next;
     }
     0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// [`grow`] as it was: every row and column a [`step`] of its own.
+    fn grow_stepwise<M: Map + ?Sized>(
+        m: &mut M,
+        k: &mut Known,
+        grow: &Grow,
+        w: &mut Grown,
+        tests: &mut u32,
+    ) {
+        let start = *tests;
+        let mut done = 0u32;
+        let mut ax = 0usize;
+        while done != 3 {
+            if done & (1 << ax) == 0 {
+                if *tests - start >= grow.budget {
+                    return;
+                }
+                done |= step(m, k, grow, w, ax, tests) << ax;
+            }
+            ax ^= 1;
+        }
+    }
+
+    fn span(lo: i32, n: i32) -> Span {
+        Span { lo, hi: lo + n - 1 }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+        /// The rows left once the columns are done, read as one run, give the window, the
+        /// blocked flags and the words read that a step a row gives: up and down, across
+        /// the torus's seam, against walls, at the reach, with the axis full and within
+        /// any budget.
+        #[test]
+        fn the_rows_run_grows_as_the_steps(
+            marks in proptest::collection::vec((0usize..128, 0usize..128), 0..12),
+            base in (-140i32..140, 1i32..40, -140i32..140, 1i32..130),
+            goal in (-200i32..200, 1i32..30, -200i32..200, 1i32..30),
+            reach in (0i32..40, 0i32..40, 0i32..90, 0i32..90),
+            budget in prop_oneof![0u32..120, 0u32..1500],
+        ) {
+            let mut words = vec![0u32; 128 * 128];
+            for &(i1, i2) in &marks {
+                words[i2 * 128 + i1] = 1;
+            }
+            let stripes = vec![0u32; 128];
+            let (b1, b2) = (span(base.0, base.1), span(base.2, base.3));
+            let g = Grow {
+                goal: [span(goal.0, goal.1), span(goal.2, goal.3)],
+                reach: [
+                    Span { lo: b1.lo - reach.0, hi: b1.hi + reach.1 },
+                    Span { lo: b2.lo - reach.2, hi: b2.hi + reach.3 },
+                ],
+                budget,
+            };
+            let run = |stepwise: bool| {
+                let mut m = SliceMap { words: &words, stripes: &stripes };
+                let mut w = Grown { window: [b1, b2], blocked: [false, false] };
+                let mut tests = 0;
+                let mut k = Known::new();
+                if stepwise {
+                    grow_stepwise(&mut m, &mut k, &g, &mut w, &mut tests);
+                } else {
+                    grow(&mut m, &mut k, &g, &mut w, &mut tests);
+                }
+                (w, tests)
+            };
+            prop_assert_eq!(run(false), run(true));
+        }
+    }
 }
