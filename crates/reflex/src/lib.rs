@@ -85,6 +85,36 @@ pub fn u_to_urad(a_u: i32) -> i32 {
     fx::mul_shr(a_u, U_TO_URAD_Q16, 16)
 }
 
+/// A quarter pixel in micro-radians, as [`u_to_urad`] gives it (a call a pass before).
+const QUARTER_PX_URAD: i32 = fx::host_mul_shr(PIX_U / 4, U_TO_URAD_Q16, 16);
+
+/// Angles in micro-radians and their angle units (`urad_to_u`), kept while the angles
+/// stay: the goal and the previous subgoal mostly do, and each conversion is a 64-bit
+/// product called on the 68020 (~100 cycles).
+#[derive(Clone, Copy, Debug)]
+struct Units {
+    urad: [i32; 2],
+    u: [i32; 2],
+}
+
+impl Units {
+    /// Angle 0 in both units.
+    const ZERO: Units = Units {
+        urad: [0, 0],
+        u: [0, 0],
+    };
+
+    /// `a_urad` in angle units, converted only if it changed since the last call.
+    #[inline(always)]
+    fn of(&mut self, a_urad: &[i32; 2]) -> [i32; 2] {
+        if (a_urad[0] ^ self.urad[0]) | (a_urad[1] ^ self.urad[1]) != 0 {
+            self.urad = *a_urad;
+            self.u = [urad_to_u(a_urad[0]), urad_to_u(a_urad[1])];
+        }
+        self.u
+    }
+}
+
 /// Fixed margin around every rectangle, angle units (a quarter pixel, 12 mrad): servo
 /// overshoot (<= 0.5 mrad, issue 5), observer error, rounding.
 pub const MARGIN_U: i32 = 64;
@@ -417,6 +447,10 @@ pub struct Reflex {
     react_u: i32,
     /// The wand position the goal was last computed from.
     wand_um: [i32; 2],
+    /// The goal in angle units.
+    goal_units: Units,
+    /// The previous subgoal in angle units.
+    prev_units: Units,
     /// The arrest points of the last passes: a hold for an input that went quiet holds at
     /// the arrest point of the moment it did.
     log: arrest_log::ArrestLog,
@@ -460,6 +494,8 @@ impl Reflex {
             known: window::Known::new(),
             react_u: fx::host_mul_shr(cfg.border_px_s * PIX_U, REACT_US * US_TO_S_Q32, 32),
             wand_um: [0; 2],
+            goal_units: Units::ZERO,
+            prev_units: Units::ZERO,
             log: arrest_log::ArrestLog::new(),
         }
     }
@@ -665,8 +701,9 @@ impl Reflex {
             obs: obs_lat,
             wide,
         };
-        let a1 = prepare(0, sv, &prev, &goal_urad, &m);
-        let a2 = prepare(1, sv, &prev, &goal_urad, &m);
+        let (goal_u, prev_u) = (self.goal_units.of(&goal_urad), self.prev_units.of(&prev));
+        let a1 = prepare(0, sv, &prev, &prev_u, &goal_u, &m);
+        let a2 = prepare(1, sv, &prev, &prev_u, &goal_u, &m);
         let t_stop_us = masks::min(masks::max(a1.stop_us, a2.stop_us) + lat_us, 400_000);
         let obs_stop = fx::mul_shr(border_u_s, t_stop_us * US_TO_S_Q32, 32) + 1;
         let clear_px = ESCAPE_CLEAR_PX + ((wide + PIX_U - 1) >> 8);
@@ -849,7 +886,7 @@ impl Reflex {
     /// (docs/toolchain.md).
     #[inline(never)]
     fn stall(&mut self, sv: &ServoView, goal_urad: &[i32; 2], sub: &[i32; 2]) -> u32 {
-        let quarter = u_to_urad(PIX_U / 4);
+        let quarter = QUARTER_PX_URAD;
         let d = |a: i32, b: i32| (a - b) | (b - a);
         // (a - b) | (b - a) is negative exactly when a != b.
         let off_goal = d(sub[0], goal_urad[0]) | d(sub[1], goal_urad[1]);
@@ -906,7 +943,14 @@ struct Margins {
 /// Axis `i`'s state: its arithmetic, then its base rectangle, arrest region and own
 /// neighbourhood.
 #[inline(never)]
-fn prepare(i: usize, sv: &ServoView, prev: &[i32; 2], goal: &[i32; 2], m: &Margins) -> Axis {
+fn prepare(
+    i: usize,
+    sv: &ServoView,
+    prev: &[i32; 2],
+    prev_u: &[i32; 2],
+    goal_u: &[i32; 2],
+    m: &Margins,
+) -> Axis {
     let lat_q32 = m.lat_us * US_TO_S_Q32;
     let omega_urad_s = sv.omega_urad_s[i];
     let w = masks::abs(urad_to_u(omega_urad_s));
@@ -916,7 +960,7 @@ fn prepare(i: usize, sv: &ServoView, prev: &[i32; 2], goal: &[i32; 2], m: &Margi
     let back = omega_urad_s >> 31;
     let theta = urad_to_u(sv.theta_urad[i]);
     let arrest = urad_to_u(sv.arrest_urad[i]);
-    let g_prev = urad_to_u(prev[i]);
+    let g_prev = prev_u[i];
     // Where the arm stops at worst if it brakes after the latency: the arrest point
     // advanced by the latency (V.6) and by the servo's possible inertia error.
     let slack = masks::abs(arrest - theta) >> ARREST_SLACK_SHIFT;
@@ -942,7 +986,7 @@ fn prepare(i: usize, sv: &ServoView, prev: &[i32; 2], goal: &[i32; 2], m: &Margi
         omega_urad_s,
         prev_urad: prev[i],
         theta,
-        goal: urad_to_u(goal[i]),
+        goal: goal_u[i],
         adv,
         // Below the rest threshold, the stop time of the threshold's speed: the margin
         // that follows it then stays put while the arm rests (an arm braked at a wall, its

@@ -776,3 +776,29 @@ fn a_written_column_is_read_again_and_only_it() {
     gram.write(19, 0, true, 1);
     assert!(!ask(&mut gram, &mut k).0);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// The kept conversions answer as a fresh one, whatever came before (repeated
+    /// angles, one component changed, both).
+    #[test]
+    fn kept_units_answer_as_a_fresh_conversion(
+        seq in proptest::collection::vec(
+            prop_oneof![Just(0i32), -7_000_000i32..7_000_000, Just(1_234_567)],
+            2..60,
+        ),
+    ) {
+        let mut k = Units::ZERO;
+        for w in seq.windows(2) {
+            let a = [w[0], w[1]];
+            prop_assert_eq!(k.of(&a), [urad_to_u(a[0]), urad_to_u(a[1])]);
+            prop_assert_eq!(k.of(&a), [urad_to_u(a[0]), urad_to_u(a[1])]);
+        }
+    }
+}
+
+/// The stall's quarter pixel is the conversion's.
+#[test]
+fn the_quarter_pixel_constant_is_the_conversion() {
+    assert_eq!(QUARTER_PX_URAD, u_to_urad(PIX_U / 4));
+}
