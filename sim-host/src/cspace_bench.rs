@@ -194,7 +194,8 @@ pub fn report(dir: &Path) -> Result<String, String> {
     let mut o = String::new();
     let _ = writeln!(
         o,
-        "C-space board image on the emulated 68020 at 16.7 MHz (no VME wait states)"
+        "C-space board image on the emulated 68020 at 16.7 MHz (no VME wait states; timing: {})",
+        crate::emu::timing_name()
     );
     let _ = writeln!(
         o,

@@ -109,6 +109,108 @@ pub struct BoardBus<'a> {
     pub beat_addr: u32,
     /// Main-loop pass timing.
     pub beats: &'a mut LoopStats,
+    /// The CPU's instruction cache.
+    pub icache: &'a mut ICache,
+}
+
+/// Whether new boards model the instruction cache ([`ICache::model`]); `sim-host --icache`.
+static MODEL_ICACHE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Sets whether boards created from now on model the 68020's instruction cache
+/// ([`ICache`]) or take every instruction at the manual's cache-case time (the default).
+pub fn set_icache_model(on: bool) {
+    MODEL_ICACHE.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// How the images' instructions are timed, for reports: the setting of
+/// [`set_icache_model`].
+pub fn timing_name() -> &'static str {
+    if MODEL_ICACHE.load(std::sync::atomic::Ordering::Relaxed) {
+        "modelled 256-byte instruction cache (--icache)"
+    } else {
+        "cache case for every instruction (without --icache)"
+    }
+}
+
+/// The MC68020's on-chip instruction cache (User's Manual section 6): 64 long words,
+/// direct-mapped by address bits 2-7, tagged by bits 8-31 and the function code's
+/// supervisor bit, filled a long word at a time on a miss; enabled, frozen and cleared
+/// through CACR (`EI`, `FI`, `CI`, `CEI` with CAAR). The core takes an instruction's
+/// "cache case" time from the manual's tables when every word of it was fetched from the
+/// cache, its "worst case" time otherwise. Without [`ICache::model`] the bus says "cached"
+/// for every instruction (the crate's default, and every figure measured before
+/// 2026-11-26's seventh session): as if all code ran from a cache of any size, an upper
+/// bound on the speed (docs/performance.md).
+#[derive(Clone, Debug)]
+pub struct ICache {
+    /// Model the cache; otherwise every instruction counts as fetched from it.
+    pub model: bool,
+    /// Tag (address bits 8-31, supervisor bit 0) plus 2 of each entry; 0: invalid.
+    lines: [u32; 64],
+    /// CACR.EI.
+    enabled: bool,
+    /// CACR.FI: hits are served, misses do not fill.
+    frozen: bool,
+    /// Every instruction-stream fetch of the current instruction hit.
+    all_hit: bool,
+    /// The last instruction-stream fetch hit.
+    last_hit: bool,
+    /// The CACR value last applied.
+    cacr: u32,
+    /// Fetches that hit and that missed since reset (a miss with the cache off counts).
+    pub hits: u64,
+    /// See `hits`.
+    pub misses: u64,
+}
+
+impl Default for ICache {
+    fn default() -> Self {
+        Self {
+            model: MODEL_ICACHE.load(std::sync::atomic::Ordering::Relaxed),
+            lines: [0; 64],
+            enabled: false,
+            frozen: false,
+            all_hit: false,
+            last_hit: false,
+            cacr: 0,
+            hits: 0,
+            misses: 0,
+        }
+    }
+}
+
+impl ICache {
+    /// An instruction-stream fetch of the long word holding `a` (supervisor program space:
+    /// the images run in supervisor mode).
+    fn fetch(&mut self, a: u32) {
+        let i = ((a >> 2) & 63) as usize;
+        let tag = (a & !0xFF) | 2;
+        let hit = self.enabled && self.lines[i] == tag;
+        if self.enabled && !hit && !self.frozen {
+            self.lines[i] = tag;
+        }
+        self.last_hit = hit;
+        self.all_hit &= hit;
+        if hit {
+            self.hits += 1;
+        } else {
+            self.misses += 1;
+        }
+    }
+
+    /// A write to CACR (`strobes`: its clear bits, CAAR for `CEI`).
+    fn control(&mut self, cacr: u32, caar: u32, strobes: u32) {
+        use m68k::core::cpu::{CACR_CEI, CACR_CI, CACR_EI, CACR_FI};
+        self.cacr = cacr;
+        self.enabled = cacr & CACR_EI != 0;
+        self.frozen = cacr & CACR_FI != 0;
+        if strobes & CACR_CI != 0 {
+            self.lines = [0; 64];
+        }
+        if strobes & CACR_CEI != 0 {
+            self.lines[((caar >> 2) & 63) as usize] = 0;
+        }
+    }
 }
 
 /// Main-loop pass timing of an emulated board, from the system-clock cycles at which it
@@ -200,6 +302,36 @@ impl BoardBus<'_> {
 }
 
 impl AddressBus for BoardBus<'_> {
+    fn try_read_immediate_word(&mut self, a: u32) -> Result<u16, BusFault> {
+        self.icache.fetch(a);
+        self.try_read_word(a)
+    }
+    fn try_read_immediate_long(&mut self, a: u32) -> Result<u32, BusFault> {
+        self.icache.fetch(a);
+        if a & 3 != 0 {
+            self.icache.fetch(a.wrapping_add(2));
+        }
+        self.try_read_long(a)
+    }
+    fn read_immediate_word(&mut self, a: u32) -> u16 {
+        self.try_read_immediate_word(a).unwrap_or(0xFFFF)
+    }
+    fn read_immediate_long(&mut self, a: u32) -> u32 {
+        self.try_read_immediate_long(a).unwrap_or(0xFFFF_FFFF)
+    }
+    fn begin_instruction_fetches(&mut self) {
+        self.icache.all_hit = true;
+    }
+    fn last_fetch_was_cached(&self) -> bool {
+        self.icache.last_hit || !self.icache.model
+    }
+    fn instruction_fetches_were_cached(&self) -> bool {
+        self.icache.all_hit || !self.icache.model
+    }
+    fn cache_control(&mut self, cacr: u32, caar: u32, strobes: u32) -> bool {
+        self.icache.control(cacr, caar, strobes);
+        true
+    }
     fn read_byte(&mut self, a: u32) -> u8 {
         self.try_read_byte(a).unwrap_or(0xFF)
     }
@@ -301,6 +433,8 @@ pub struct EmuBoard {
     pub t0: u64,
     /// Main-loop pass timing (heartbeat writes).
     pub beats: LoopStats,
+    /// The CPU's instruction cache.
+    pub icache: ICache,
     /// The top of the stack (the image's `_stack_top`), if the image names it.
     pub stack_top: Option<u32>,
     /// The lowest stack pointer seen after an instruction since reset (the stack's
@@ -339,6 +473,7 @@ impl EmuBoard {
             state: RunState::Running,
             t0: 0,
             beats: LoopStats::default(),
+            icache: ICache::default(),
             stack_top: image.symbol("_stack_top"),
             lowest_sp: u32::MAX,
         };
@@ -349,6 +484,7 @@ impl EmuBoard {
             now: 0,
             beat_addr: beat_addr(id),
             beats: &mut b.beats,
+            icache: &mut b.icache,
         };
         b.cpu.reset(&mut bus);
         b.lowest_sp = b.cpu.dar[15];
@@ -388,12 +524,19 @@ impl EmuBoard {
                 now: self.t0 + self.cycles,
                 beat_addr,
                 beats: &mut self.beats,
+                icache: &mut self.icache,
             };
             let sp = &mut self.lowest_sp;
             let r = self
                 .cpu
                 .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
                     bus.now += c as u64;
+                    // A MOVEC to CACR: this entry point leaves the cache control to the
+                    // host, which applies it before the next instruction's fetches.
+                    if cpu.cacr != bus.icache.cacr || cpu.cacr_pending_ops != 0 {
+                        bus.icache.control(cpu.cacr, cpu.caar, cpu.cacr_pending_ops);
+                        cpu.cacr_pending_ops = 0;
+                    }
                     *sp = (*sp).min(cpu.dar[15]);
                     if breaks.contains(&cpu.pc) {
                         m68k::CycleBatchControl::Return
@@ -499,4 +642,89 @@ fn take_surfaced(cpu: &mut CpuCore, bus: &mut BoardBus, exit: CycleBatchExit) ->
         CycleBatchExit::IllegalInstruction { .. } => cpu.take_illegal_exception(bus),
     };
     (c.max(0) as u64, false)
+}
+
+#[cfg(test)]
+mod icache_tests {
+    use super::*;
+    use crate::image::{Image, Segment};
+
+    /// A program at 0x400 (vectors: stack 0x8000, PC 0x400): `moveq #cacr, d0;
+    /// movec d0, cacr; moveq #99, d1; loop: dbra d1, loop; stop #0x2700`.
+    fn program(cacr: u8) -> Image {
+        let mut code = vec![0u8; 0x400];
+        code[0..4].copy_from_slice(&0x8000u32.to_be_bytes());
+        code[4..8].copy_from_slice(&0x400u32.to_be_bytes());
+        let words: [u16; 8] = [
+            0x7000 | cacr as u16, // moveq #cacr, d0
+            0x4E7B,               // movec d0, cacr
+            0x0002,
+            0x7263, // moveq #99, d1
+            0x51C9, // dbra d1, *
+            0xFFFE,
+            0x4E72, // stop #0x2700
+            0x2700,
+        ];
+        for w in words {
+            code.extend_from_slice(&w.to_be_bytes());
+        }
+        Image {
+            path: "icache-test".into(),
+            segments: vec![Segment {
+                addr: 0,
+                data: code,
+            }],
+            sizes: None,
+            symbols: vec![],
+        }
+    }
+
+    /// Runs the program to its STOP, the cache modelled or not: (cycles, cache hits,
+    /// misses).
+    fn run_as(cacr: u8, model: bool) -> (u64, u64, u64) {
+        let mut global = vec![0u8; 64];
+        let mut b = EmuBoard::new(
+            BoardId::Servo,
+            &program(cacr),
+            Box::new(NullDevice),
+            &mut global,
+        );
+        b.icache.model = model;
+        b.run(&mut global, 100_000);
+        assert_eq!(b.state, RunState::Halted, "the program ends in STOP");
+        (b.cycles, b.icache.hits, b.icache.misses)
+    }
+
+    fn run(cacr: u8) -> (u64, u64, u64) {
+        run_as(cacr, true)
+    }
+
+    /// With the cache enabled (CACR CI | EI) the loop runs from it after its first pass, at
+    /// the manual's cache-case times; left off (the reset state) every fetch misses and
+    /// every instruction takes its worst-case time; frozen after a clear, nothing fills.
+    #[test]
+    fn the_instruction_cache_serves_a_loop_once_enabled() {
+        let (on, hits_on, misses_on) = run(9);
+        let (off, hits_off, misses_off) = run(0);
+        let (frozen, hits_frozen, _) = run(0b1011);
+        assert_eq!(hits_off, 0);
+        assert_eq!(hits_frozen, 0, "a frozen, cleared cache never fills");
+        // The 100 passes of the loop hit (two words, one long word), all but the first.
+        assert!(
+            hits_on >= 99 && misses_on <= 8,
+            "{hits_on} hits, {misses_on} misses"
+        );
+        assert!(misses_off >= 100);
+        // DBRA taken: 6-7 cycles cache case, 9-10 worst case (MC68020 UM table 8-9).
+        assert!(off > on + 200, "cache on {on} cycles, off {off}");
+        assert_eq!(frozen, off, "frozen and empty is as slow as off");
+        // Not modelled (the default): every instruction at its cache-case time, the cache
+        // on or off.
+        let plain = run_as(0, false).0;
+        assert!(
+            plain < on && on - plain < 20,
+            "{plain} against {on}: only the first misses"
+        );
+        assert_eq!(run_as(9, false).0, run_as(0, false).0);
+    }
 }

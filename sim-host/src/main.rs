@@ -16,6 +16,13 @@ const BOARD_NAMES: &str = "sensing, cspace, servo, reflex, planner, cspace0..2";
 #[derive(Parser)]
 #[command(version, about)]
 struct Cli {
+    /// Image mode, benches and profiles: model the 68020's 256-byte instruction cache, so
+    /// an instruction takes the manual's cache-case time only when it was fetched from the
+    /// cache and its worst-case time otherwise. Without it every instruction takes the
+    /// cache-case time (an upper bound on the images' speed; the basis of the figures in
+    /// docs/ before 2026-11-26's seventh session). docs/performance.md compares the two.
+    #[arg(long, global = true)]
+    icache: bool,
     #[command(subcommand)]
     cmd: Cmd,
 }
@@ -248,6 +255,7 @@ fn end_quietly_on_closed_stdout() {
 fn main() -> ExitCode {
     end_quietly_on_closed_stdout();
     let cli = Cli::parse();
+    sim_host::emu::set_icache_model(cli.icache);
     match cli.cmd {
         Cmd::Run { scenario, run } => match Scenario::load(&scenario) {
             Ok(sc) => run_cmd(&sc, run, "out/run"),
@@ -505,11 +513,12 @@ fn main() -> ExitCode {
                 Ok(p) => {
                     let per = p.cycles as f64 / p.loops.max(1) as f64;
                     println!(
-                        "{board}: {} cycles, {} loops: {per:.0} cycles per loop = {:.0} loops/s at {:.1} MHz",
+                        "{board}: {} cycles, {} loops: {per:.0} cycles per loop = {:.0} loops/s at {:.1} MHz (timing: {})",
                         p.cycles,
                         p.loops,
                         CPU_HZ as f64 / per,
-                        CPU_HZ as f64 / 1e6
+                        CPU_HZ as f64 / 1e6,
+                        sim_host::emu::timing_name()
                     );
                     let per_beat = sim_host::boot::passes_per_beat(id);
                     if per_beat > 1 {

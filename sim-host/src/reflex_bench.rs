@@ -465,7 +465,8 @@ pub fn report(dir: &Path) -> Result<String, String> {
     let mut r = String::new();
     let _ = writeln!(
         r,
-        "bench reflex: the reflex image on the emulated 68020 at 16.7 MHz (whole main loop)"
+        "bench reflex: the reflex image on the emulated 68020 at 16.7 MHz (whole main loop; timing: {})",
+        crate::emu::timing_name()
     );
     let _ = writeln!(
         r,
