@@ -252,9 +252,28 @@ fn end_quietly_on_closed_stdout() {
     }));
 }
 
+/// Whether `cmd` runs board images on emulated 68020s (where `--icache` means something).
+fn runs_images(cmd: &Cmd) -> bool {
+    match cmd {
+        Cmd::Run { run, .. } | Cmd::Demo { run, .. } => run.mode == Mode::Image,
+        Cmd::Bench { what, .. } => matches!(what.as_str(), "cspace" | "sensing" | "reflex"),
+        Cmd::Campaign { what, mode, .. } => what == "faults" && *mode == Mode::Image,
+        Cmd::Profile { .. } | Cmd::Boot { .. } => true,
+        _ => false,
+    }
+}
+
 fn main() -> ExitCode {
     end_quietly_on_closed_stdout();
     let cli = Cli::parse();
+    if cli.icache && !runs_images(&cli.cmd) {
+        eprintln!(
+            "sim-host: --icache times the images' instructions, and this command runs no image \
+             (image runs: run/demo --mode image, campaign faults --mode image, bench cspace, \
+             sensing or reflex, profile, boot)"
+        );
+        return ExitCode::from(2);
+    }
     sim_host::emu::set_icache_model(cli.icache);
     match cli.cmd {
         Cmd::Run { scenario, run } => match Scenario::load(&scenario) {

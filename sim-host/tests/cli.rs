@@ -23,3 +23,16 @@ fn a_closed_stdout_ends_the_program_quietly() {
     assert_eq!(out.status.code(), Some(141), "stderr: {stderr}");
     assert!(!stderr.contains("panicked"), "stderr: {stderr}");
 }
+
+/// `--icache` on a command that runs no image is refused with the reason, not ignored.
+#[test]
+fn icache_without_an_image_is_refused() {
+    let scenario = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/fig_vi_3_free.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["--icache", "run", scenario, "--mode", "native"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("runs no image"), "stderr: {stderr}");
+}
