@@ -23,9 +23,10 @@ __vectors:
     .globl _reset
 _reset:
     move.w  #0x2700, %sr
-    lea     _stack_top, %sp
-    /* The instruction cache cleared and enabled (CACR CI | EI): 64 long words; the
-     * main loops' inner loops run from it (User's Manual section 6). */
+    /* The stack pointer is vector 0's _stack_top, loaded by the reset itself. In the six
+     * bytes a `lea _stack_top, %sp` took here (so that no code after moves, and no branch
+     * changes its alignment): the instruction cache cleared and enabled (CACR CI | EI),
+     * 64 long words the main loops' inner loops run from (User's Manual section 6). */
     moveq   #9, %d0
     movec   %d0, %cacr
     /* .data from its load address, then .bss cleared, by the runtime's own memcpy and
