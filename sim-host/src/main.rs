@@ -256,7 +256,9 @@ fn end_quietly_on_closed_stdout() {
 fn runs_images(cmd: &Cmd) -> bool {
     match cmd {
         Cmd::Run { run, .. } | Cmd::Demo { run, .. } => run.mode == Mode::Image,
-        Cmd::Bench { what, .. } => matches!(what.as_str(), "cspace" | "sensing" | "reflex"),
+        Cmd::Bench { what, .. } => {
+            matches!(what.as_str(), "cspace" | "sensing" | "reflex" | "planner")
+        }
         Cmd::Campaign { what, mode, .. } => what == "faults" && *mode == Mode::Image,
         Cmd::Profile { .. } | Cmd::Boot { .. } => true,
         _ => false,
@@ -270,7 +272,7 @@ fn main() -> ExitCode {
         eprintln!(
             "sim-host: --icache times the images' instructions, and this command runs no image \
              (image runs: run/demo --mode image, campaign faults --mode image, bench cspace, \
-             sensing or reflex, profile, boot)"
+             sensing, reflex or planner, profile, boot)"
         );
         return ExitCode::from(2);
     }

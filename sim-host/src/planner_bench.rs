@@ -255,9 +255,10 @@ pub fn run(dir: &Path, case: &Case) -> Result<Report, String> {
 
 /// `sim-host bench planner`: every case; the report text.
 pub fn report(dir: &Path) -> Result<String, String> {
-    let mut t = String::from(
-        "planner image on the emulated 68020 at 16.7 MHz, against the native board pass for pass\n\
+    let mut t = format!(
+        "planner image on the emulated 68020 at 16.7 MHz (timing: {}), against the native board pass for pass\n\
          case                                    passes  agree  cycles/pass min / mean / max   rate mean / worst   modes  escapes\n",
+        crate::emu::timing_name()
     );
     for c in cases() {
         let r = run(dir, &c)?;

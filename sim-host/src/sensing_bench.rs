@@ -568,7 +568,8 @@ pub fn report(out: &std::path::Path, size: Size, seed: u64) -> Result<String, St
                 let hz = m.frames_hz;
                 let _ = writeln!(
                     r,
-                    "image (emulated 68020 at 16.7 MHz), {case}: {hz:.0} frames/s = {hz:.0} Hz per beacon (target 500: {}), {:.0} cycles a slot (budget 4175), of them busy {:.0} ({:.1}%: the rest waits for the timer)",
+                    "image (emulated 68020 at 16.7 MHz, timing: {}), {case}: {hz:.0} frames/s = {hz:.0} Hz per beacon (target 500: {}), {:.0} cycles a slot (budget 4175), of them busy {:.0} ({:.1}%: the rest waits for the timer)",
+                    crate::emu::timing_name(),
                     if hz >= 499.0 { "met" } else { "MISSED" },
                     m.slot_cycles,
                     m.busy_cycles,
