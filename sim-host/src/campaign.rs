@@ -217,8 +217,8 @@ pub fn link1_band_half_rad(d_m: f64, r_m: f64) -> Option<f64> {
 /// [`link1_band_half_rad`]), so the arm's theta1 cannot leave the gap between bands it
 /// starts in, and a gap that two bands close (a faster disk catching a slower one round the
 /// shoulder) leaves no way out. Computed generously for the arm: it may be anywhere in a
-/// free gap at once (any speed), and reach every gap within [`TRAP_SLACK_RAD`] of the gaps
-/// it could be in a step of [`TRAP_DT_S`] before (gaps split, merge and close as bands
+/// free gap at once (any speed), and reach every gap within `TRAP_SLACK_RAD` of the gaps
+/// it could be in a step of `TRAP_DT_S` before (gaps split, merge and close as bands
 /// pass). `Some(t)` only when even that arm has no gap left at time t: a collision no reflex
 /// can prevent.
 pub fn link1_trapped_s(
@@ -305,14 +305,14 @@ const TRAP2_DT_S: f64 = 0.008;
 
 /// When, if ever within `duration_s`, the arm starting at `start_rad` must touch one of
 /// `obstacles` whatever any controller does, in both angles: the same question as
-/// [`link1_trapped_s`] on a grid of [`TRAP2_CELLS`]^2 cells of configuration space, again
+/// [`link1_trapped_s`] on a grid of `TRAP2_CELLS`^2 cells of configuration space, again
 /// generous to the arm. A cell is blocked only when every configuration in it touches a
 /// disk: the outline at the cell's centre is within the disk's radius less 0.516 half a
 /// cell (no point of the outline moves further when theta1 and theta2 each move half a
 /// cell: the elbow 0.25 m from the shoulder, the farthest point of link 2 0.265 m from the
 /// elbow), and the distance to a moved outline changes by at most the largest move. The arm
 /// may be anywhere in a run of unblocked cells (8-connected) at once, and reaches every run
-/// touching one cell beyond those it could be in a [`TRAP2_DT_S`] step before. `Some(t)`
+/// touching one cell beyond those it could be in a `TRAP2_DT_S` step before. `Some(t)`
 /// only when even that arm has no cell left at time t. Slow (a few seconds a scene): the
 /// campaign asks it of scenes with collisions only.
 pub fn trapped_s(start_rad: [f64; 2], obstacles: &[Obstacle], duration_s: f64) -> Option<f64> {

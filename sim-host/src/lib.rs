@@ -1,6 +1,6 @@
 //! The host simulator of the five-board controller (design.md section 7).
 //!
-//! * [`bench`]: measurements of the simulator itself.
+//! * [`bench`](mod@bench): measurements of the simulator itself.
 //! * [`image`]: board images (ELF, S-record, binary) and why one is refused.
 //! * [`emu`]: a board's real image on an emulated 68020 and the bus it sees.
 //! * [`devices`]: the boards' private I/O at register level.

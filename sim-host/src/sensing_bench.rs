@@ -413,7 +413,7 @@ fn resting_tip_urad() -> [i32; 2] {
 }
 
 /// The host as a servo board holding the arm at rest with the tip at its lit beacon
-/// ([`resting_tip_urad`]): one servo state record a call (call it every 0.25 ms).
+/// (`resting_tip_urad`): one servo state record a call (call it every 0.25 ms).
 #[derive(Debug)]
 pub struct RestingServo {
     theta_urad: [i32; 2],

@@ -3,8 +3,10 @@
 //!
 //! * A 256-entry vector table at address 0: the initial stack pointer, the reset entry, and a
 //!   common handler for every other vector.
-//! * Reset: interrupts masked, stack at the top of local RAM, `.data` copied from its load
-//!   address, `.bss` cleared, then the board's `main` (declared with [`entry!`]).
+//! * Reset: interrupts masked, the stack at the top of local RAM (vector 0), the instruction
+//!   cache cleared and enabled (`CACR = CI | EI`; User's Manual section 6), `.data` copied
+//!   from its load address, `.bss` cleared, then the board's `main` (declared with `entry!`,
+//!   on the target).
 //! * Exceptions (bus error, address error, illegal instruction, zero divide, spurious and
 //!   unexpected interrupts, anything else): the stacked frame is decoded ([`decode_frame`]), the
 //!   fault (vector, PC, SR, fault address) is recorded in the board's slot in global RAM, the
