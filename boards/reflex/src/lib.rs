@@ -252,8 +252,9 @@ fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
         OBSTACLE_BEACONS[5] as usize,
     ];
     // Flags words: the valid bit moved up to the moving bit's place, and both.
-    let (f0, f1, f2) = (t[4 * B[0] + 4], t[4 * B[1] + 4], t[4 * B[2] + 4]);
-    let (f3, f4, f5) = (t[4 * B[3] + 4], t[4 * B[4] + 4], t[4 * B[5] + 4]);
+    let f = |b: usize| beacon_word(t, b, 3);
+    let (f0, f1, f2) = (f(B[0]), f(B[1]), f(B[2]));
+    let (f3, f4, f5) = (f(B[3]), f(B[4]), f(B[5]));
     let any = (f0 & (f0 << 7))
         | (f1 & (f1 << 7))
         | (f2 & (f2 << 7))
