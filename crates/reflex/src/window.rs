@@ -31,11 +31,7 @@ pub trait Map {
     fn free_rows(&mut self, i2: u32, nb: u32, a0: u32, n0: u32, a1: u32, n1: u32) -> u32 {
         let mut k = 0;
         while k < nb {
-            let mut acc = self.row_or(i2 + k, a0, n0);
-            if n1 > 0 {
-                acc |= self.row_or(i2 + k, a1, n1);
-            }
-            if acc != 0 {
+            if row_or2(self, i2 + k, a0, n0, a1, n1) != 0 {
                 return k;
             }
             k += 1;
@@ -184,6 +180,17 @@ impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
         let w0 = i1 & !31;
         join(self.stripe_bits(w0), self.stripe_bits(0), i1 & 31)
     }
+}
+
+/// The bitwise or of row `i2`'s words over the runs (`a0`, `n0`) and (`a1`, `n1`) (the
+/// second empty when `n1` is 0): a span's row as [`Span::runs`] splits it at the seam.
+#[inline(always)]
+fn row_or2<M: Map + ?Sized>(m: &mut M, i2: u32, a0: u32, n0: u32, a1: u32, n1: u32) -> u32 {
+    let mut acc = m.row_or(i2, a0, n0);
+    if n1 > 0 {
+        acc |= m.row_or(i2, a1, n1);
+    }
+    acc
 }
 
 /// Bits `sh ..` of `a` followed by `b`'s low bits: a 32-pixel run starting `sh` pixels into
@@ -540,11 +547,7 @@ pub fn window_row_free<M: Map + ?Sized>(m: &mut M, i2: i32, s1: Span, tests: &mu
     let r = (i2 as u32) & (SIDE - 1);
     let [(a0, n0), (a1, n1)] = s1.runs();
     *tests += n0 + n1;
-    let mut acc = m.row_or(r, a0, n0);
-    if n1 > 0 {
-        acc |= m.row_or(r, a1, n1);
-    }
-    acc == 0
+    row_or2(m, r, a0, n0, a1, n1) == 0
 }
 
 /// How far the window may grow along each axis, and where the goal lies.
@@ -668,11 +671,7 @@ fn rows_toward<M: Map + ?Sized, const UP: bool>(
         let mut f = 0;
         while f < n {
             let b = ((cur.lo - 1 - f as i32) as u32) & (SIDE - 1);
-            let mut acc = m.row_or(b, a0, n0);
-            if n1 > 0 {
-                acc |= m.row_or(b, a1, n1);
-            }
-            if acc != 0 {
+            if row_or2(m, b, a0, n0, a1, n1) != 0 {
                 break;
             }
             f += 1;
