@@ -318,7 +318,7 @@ pub enum Fault {
 }
 
 /// One pass's outputs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Output {
     /// Publish this subgoal (absolute angles); `None` before the first servo state.
     pub subgoal_urad: Option<[i32; 2]>,
@@ -339,9 +339,15 @@ pub struct Output {
     pub new_fault: Option<Fault>,
 }
 
+impl Default for Output {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
 impl Output {
-    /// No subgoal, nothing tested, no fault: [`Output::default`] as a constant (the boards
-    /// build theirs in `const fn`s).
+    /// No subgoal, nothing tested, no fault (a constant: the boards build theirs in
+    /// `const fn`s; [`Output::default`] is this).
     pub const EMPTY: Output = Output {
         subgoal_urad: None,
         flags: 0,
@@ -354,7 +360,7 @@ impl Output {
     };
 
     /// Back to [`Output::EMPTY`], field by field (an assignment of the whole value
-    /// compiled to a `memset` call on the 68020).
+    /// compiled to a `memset` call on the 68020; a test holds the two together).
     #[inline(never)]
     pub fn clear(&mut self) {
         self.subgoal_urad = None;

@@ -802,3 +802,21 @@ proptest! {
 fn the_quarter_pixel_constant_is_the_conversion() {
     assert_eq!(QUARTER_PX_URAD, u_to_urad(PIX_U / 4));
 }
+
+/// `Output::clear` writes every field back to `Output::EMPTY` (it lists the fields again,
+/// to keep the 68020 from a `memset` call).
+#[test]
+fn a_cleared_output_is_the_empty_one() {
+    let mut out = Output {
+        subgoal_urad: Some([1, 2]),
+        flags: 3,
+        goal_urad: [4, 5],
+        window: [(6, 7), (8, 9)],
+        tests: 10,
+        known: 11,
+        dt_us: 12,
+        new_fault: Some(Fault::ServoStale),
+    };
+    out.clear();
+    assert_eq!(out, Output::EMPTY);
+}
