@@ -34,6 +34,21 @@ fn probe_board(img: &Image, global: &mut [u8], name: &str, words: &[u32]) -> (Em
     (b, f)
 }
 
+/// The host's answers to `asks`, `I` words a question: `f` answers each into `O` words (the
+/// probes' scripted functions, run on the host).
+fn host_each<T: Copy, const I: usize, const O: usize>(
+    asks: &[T],
+    mut f: impl FnMut(&[T; I], &mut [i32; O]),
+) -> Vec<[i32; O]> {
+    asks.chunks(I)
+        .map(|w| {
+            let mut o = [0; O];
+            f(w.try_into().unwrap(), &mut o);
+            o
+        })
+        .collect()
+}
+
 /// Probe `name` on the reflex image, called once per question of `asks` (`in_words` words
 /// each, answered at [`OUT`]): asserts each answer is the host's (`host[i]`, `what` naming
 /// a question in the message) and returns each call's cycles.
@@ -226,20 +241,14 @@ fn script(global: &mut [u8], n: usize) -> Vec<u32> {
 
 fn host_run(global: &mut [u8], inputs: &[u32]) -> Vec<[i32; OUT_WORDS]> {
     let mut r = Reflex::default();
-    inputs
-        .chunks(IN_WORDS)
-        .map(|w| {
-            let mut o = [0; OUT_WORDS];
-            let w: &[u32; IN_WORDS] = w.try_into().unwrap();
-            scripted_pass(
-                &mut r,
-                w,
-                &mut reflex::window::BusMap(&mut ArrayBus::new(global)),
-                &mut o,
-            );
-            o
-        })
-        .collect()
+    host_each::<u32, IN_WORDS, OUT_WORDS>(inputs, |w, o| {
+        scripted_pass(
+            &mut r,
+            w,
+            &mut reflex::window::BusMap(&mut ArrayBus::new(global)),
+            o,
+        )
+    })
 }
 
 #[test]
@@ -354,19 +363,14 @@ fn the_reflex_images_escapes_match_the_host() {
         "{inside} inside, {border} on borders"
     );
     let mut s = reflex::escape::Scratch::new();
-    let host: Vec<[i32; ESCAPE_OUT_WORDS]> = asks
-        .chunks(ESCAPE_IN_WORDS)
-        .map(|w| {
-            let mut o = [0; ESCAPE_OUT_WORDS];
-            scripted_escape(
-                &mut s,
-                w.try_into().unwrap(),
-                &mut reflex::window::BusMap(&mut ArrayBus::new(&mut global)),
-                &mut o,
-            );
-            o
-        })
-        .collect();
+    let host = host_each::<i32, ESCAPE_IN_WORDS, ESCAPE_OUT_WORDS>(&asks, |w, o| {
+        scripted_escape(
+            &mut s,
+            w,
+            &mut reflex::window::BusMap(&mut ArrayBus::new(&mut global)),
+            o,
+        )
+    });
     let crossed = host.iter().filter(|o| o[0] == 1 && o[6] > 0).count();
     let none = host.iter().filter(|o| o[0] == 0).count();
     assert!(crossed > 20, "only {crossed} plans crossed marks");
@@ -436,14 +440,9 @@ fn the_reflex_images_evasions_match_the_host() {
     }
     let mut sc = reflex::evade::Scratch::new();
     let mut obs = [reflex::ObstacleView::NONE; reflex::OBSTACLES];
-    let host: Vec<[i32; EVADE_OUT_WORDS]> = asks
-        .chunks(EVADE_IN_WORDS)
-        .map(|w| {
-            let mut o = [0; EVADE_OUT_WORDS];
-            scripted_evade(&mut sc, w.try_into().unwrap(), &mut obs, &mut o);
-            o
-        })
-        .collect();
+    let host = host_each::<i32, EVADE_IN_WORDS, EVADE_OUT_WORDS>(&asks, |w, o| {
+        scripted_evade(&mut sc, w, &mut obs, o)
+    });
     let horizon = reflex::evade::STEPS as i32 - 1;
     let at_once = host.iter().filter(|o| o[3..].contains(&0)).count();
     let through = host.iter().filter(|o| o[3..].contains(&horizon)).count();
@@ -651,19 +650,9 @@ fn the_reflex_images_known_columns_match_the_host() {
     }
     let mut host_global = global.clone();
     let mut k = reflex::window::Known::new();
-    let host: Vec<[i32; KNOWN_OUT_WORDS]> = asks
-        .chunks(KNOWN_IN_WORDS)
-        .map(|w| {
-            let mut o = [0; KNOWN_OUT_WORDS];
-            scripted_known(
-                &mut k,
-                &mut ArrayBus::new(&mut host_global),
-                w.try_into().unwrap(),
-                &mut o,
-            );
-            o
-        })
-        .collect();
+    let host = host_each::<i32, KNOWN_IN_WORDS, KNOWN_OUT_WORDS>(&asks, |w, o| {
+        scripted_known(&mut k, &mut ArrayBus::new(&mut host_global), w, o)
+    });
     let (read, vouched): (i64, i64) = host
         .iter()
         .fold((0, 0), |(a, b), o| (a + o[1] as i64, b + o[2] as i64));
