@@ -192,7 +192,8 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
     let (mut tests_sum, mut known_sum, mut samples) = (0f64, 0f64, 0u64);
     let redraw_every = (redraw_ms as f64 / step_ms) as u32;
     let mut redraws = 0u32;
-    let mut h0 = None;
+    // Whether the passes are being timed yet (from the end of the warm-up).
+    let mut timing = false;
     let mut feed = Feed {
         theta,
         omega,
@@ -236,7 +237,7 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
         sys.run_ms(step_ms);
         // Measure after the reflex has had half a second to get going.
         if k as f64 * step_ms >= 500.0 {
-            if h0.is_none() {
+            if !timing {
                 // The passes are timed from here: each heartbeat write's cycle
                 // (`emu::LoopStats`), not the host's 0.25 ms steps.
                 let b = &mut sys.boards[0].beats;
@@ -244,7 +245,7 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
                     last_beat: b.last_beat,
                     ..Default::default()
                 };
-                h0 = Some(());
+                timing = true;
             }
             if let Ok((st, _)) = vme_map::REFLEX_STATUS.read(&mut sys.bus()) {
                 tests_sum += st.tests as f64;
@@ -253,7 +254,9 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
             }
         }
     }
-    h0.ok_or("the case is shorter than its warm-up")?;
+    if !timing {
+        return Err("the case is shorter than its warm-up".into());
+    }
     let beats = sys.boards[0].beats;
     let passes = beats.periods;
     if passes == 0 {
