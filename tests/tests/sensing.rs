@@ -414,7 +414,7 @@ fn the_table_of_a_full_thesis_firmware_scan_inverts_inside_the_scanned_area() {
 
 /// Beyond the calibrated square (the thesis's 0.7 x 0.7 m, fig. II.7: "the robot tip was
 /// nearly out of view") the inverse grid extrapolates and the detector's edge folds the
-/// spot back: a disk 0.54 m out near an axis reads up to ~110 mm short of where it is
+/// spot back: a beacon 0.54-0.575 m out near an axis reads up to 140 mm short of where it is
 /// (measured 2026-11-26 over this grid). The map is only as conservative as those
 /// positions, so consumers must be able to tell them: every valid position more than 3 mm
 /// off the truth carries `EXTRAPOLATED`, and none inside the square does. (The reflex
