@@ -414,7 +414,7 @@ fn the_table_of_a_full_thesis_firmware_scan_inverts_inside_the_scanned_area() {
 
 /// Beyond the calibrated square (the thesis's 0.7 x 0.7 m, fig. II.7: "the robot tip was
 /// nearly out of view") the inverse grid extrapolates and the detector's edge folds the
-/// spot back: a beacon near an axis 0.50-0.55 m out reads up to ~130 mm short of where it is,
+/// spot back: a beacon near an axis 0.50-0.55 m out reads up to ~140 mm short of where it is,
 /// and one 0.56-0.575 m out can read just inside the square, over 200 mm short (measured
 /// 2026-11-26 over this grid). The map is only as conservative as those positions, so
 /// consumers must be able to tell them: within [`TOUCH_M`] of the shoulder every valid
