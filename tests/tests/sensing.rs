@@ -439,8 +439,8 @@ fn positions_beyond_the_calibrated_square_are_flagged_extrapolated() {
             pts.push([r * a.cos(), r * a.sin()]);
         }
     }
-    // Parked beacons 0-4 and the wand's slot 7 (`place` maps it to the sixth disk).
-    const SLOTS: [usize; 6] = [0, 1, 2, 3, 4, 7];
+    // Seven beacons a round, as the survey places them.
+    const SLOTS: [usize; 7] = sensing_bench::SURVEY_BEACONS;
     let (mut worst_plain_mm, mut worst_flagged_mm, mut flagged, mut invalid) = (0f64, 0f64, 0, 0);
     let mut beyond_far_off = 0;
     for chunk in pts.chunks(SLOTS.len()) {
