@@ -13,7 +13,9 @@
 //! two bands of theta1 in which link 1 touches a disk whatever theta2 that close within the
 //! scene (a faster disk catching a slower one round the shoulder): there no controller
 //! keeps link 1 off a disk ([`link1_trapped_s`]; 12 of the first 500 moving scenes of seed 1
-//! drew such a start, and all 12 collided).
+//! drew such a start, and all 12 collided), nor anywhere the disks close on the arm in both
+//! angles whatever it does ([`trapped_s`]). The disks stay where the camera sees them
+//! ([`Place::Sensed`], the default) or anywhere the arm reaches ([`Place::Reach`]).
 //!
 //! Scenes are independent and seeded by the campaign seed and their index, so a campaign's
 //! results do not depend on how many threads run it; a scene with a collision is written
@@ -58,6 +60,46 @@ impl Kind {
     }
 }
 
+/// Where a campaign's disks may be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Place {
+    /// Where the camera sees them (the default): a disk's centre, its beacon, stays at
+    /// least [`PLACE_MARGIN_M`] inside the calibrated square (thesis line ~430: 0.7 m x
+    /// 0.7 m, [`crate::optics::FIELD_HALF_M`]) the whole scene, so a moving disk circles
+    /// at most that far from the shoulder. Beyond the square the detector folds a beacon's
+    /// spot back and the sensed position can be 139 mm short (docs/sensing.md): the boards
+    /// cannot avoid an obstacle no sensor of theirs places, and the reflex's promise is for
+    /// sensed obstacles.
+    Sensed,
+    /// Anywhere the arm can touch: centres 0.12-0.55 m from the shoulder in any direction,
+    /// 47% of moving disks leaving the calibrated square (the campaign before 2026-11-26,
+    /// kept to measure what the sensing hole costs).
+    Reach,
+}
+
+impl Place {
+    /// Its name in output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Place::Sensed => "sensed",
+            Place::Reach => "reach",
+        }
+    }
+}
+
+/// How far inside the calibrated square a [`Place::Sensed`] disk's centre stays, m: half
+/// the survey grid's pitch, so the few millimetres a sensed position is off never flag it
+/// `EXTRAPOLATED` (5 mm outside).
+pub const PLACE_MARGIN_M: f64 = 0.010;
+
+/// Nearest a campaign disk's centre comes to the shoulder, m.
+pub const PLACE_MIN_M: f64 = 0.12;
+
+/// Furthest a [`Place::Reach`] disk's centre is from the shoulder, m: the arm's reach
+/// (0.515 m) plus the largest radius.
+pub const PLACE_MAX_M: f64 = 0.55;
+
 /// One random scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -69,8 +111,13 @@ pub struct Scene {
     pub goal_rad: [f64; 2],
 }
 
-/// The scene `index` of a campaign with seed `seed`.
-pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
+/// The scene `index` of a campaign with seed `seed`, its disks placed by `place`.
+pub fn scene(kind: Kind, place: Place, seed: u64, index: u64) -> Scene {
+    scene_drawn(kind, place, seed, index, true)
+}
+
+/// [`scene`], its moving starts checked against [`trapped_s`] only when `survivable`.
+fn scene_drawn(kind: Kind, place: Place, seed: u64, index: u64, survivable: bool) -> Scene {
     let mut rng = Rng::new(
         seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
             ^ index.wrapping_mul(0xD1B5_4A32_D192_ED03)
@@ -85,9 +132,19 @@ pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
         let n = 1 + (u(0.0, 5.0) as usize).min(4);
         let spin = if u(0.0, 1.0) < 0.5 { 1.0 } else { -1.0 };
         let mut obstacles = Vec::new();
+        let inside = crate::optics::FIELD_HALF_M - PLACE_MARGIN_M;
         for _ in 0..n {
-            let d = u(0.12, 0.55);
-            let a = u(-PI, PI);
+            let (d, a) = match (place, kind) {
+                (Place::Reach, _) => (u(PLACE_MIN_M, PLACE_MAX_M), u(-PI, PI)),
+                // A circle about the shoulder stays in the square while its radius does.
+                (Place::Sensed, Kind::Moving) => (u(PLACE_MIN_M, inside), u(-PI, PI)),
+                (Place::Sensed, Kind::Static) => loop {
+                    let (d, a) = (u(PLACE_MIN_M, PLACE_MAX_M), u(-PI, PI));
+                    if (d * a.cos()).abs() <= inside && (d * a.sin()).abs() <= inside {
+                        break (d, a);
+                    }
+                },
+            };
             let r = u(0.010, 0.035);
             let start = Disk {
                 x_m: d * a.cos(),
@@ -121,10 +178,12 @@ pub fn scene(kind: Kind, seed: u64, index: u64) -> Scene {
                     .all(|o| p.clearance_m(&o.at(0.05 * k as f64)) >= clear_m)
             });
             // Nor between two of link 1's bands of theta1 that close within the scene: no
-            // controller keeps link 1 off a disk there (`link1_trapped_s`).
+            // controller keeps link 1 off a disk there (`link1_trapped_s`); nor anywhere
+            // else the disks close on the arm whatever it does (`trapped_s`).
             let clear = clear
                 && (kind == Kind::Static
-                    || link1_trapped_s(s[0], &obstacles, kind.duration_s()).is_none());
+                    || link1_trapped_s(s[0], &obstacles, kind.duration_s()).is_none()
+                        && (!survivable || trapped_s(s, &obstacles, kind.duration_s()).is_none()));
             if clear {
                 start = Some(s);
                 break;
@@ -303,6 +362,9 @@ const TRAP2_CELLS: usize = 256;
 /// than half a cell.
 const TRAP2_DT_S: f64 = 0.008;
 
+/// Phases of a cell at which [`trapped_s`]'s fast form computes a disk's blocked cells.
+const TRAP2_PHASES: usize = 4;
+
 /// When, if ever within `duration_s`, the arm starting at `start_rad` must touch one of
 /// `obstacles` whatever any controller does, in both angles: the same question as
 /// [`link1_trapped_s`] on a grid of `TRAP2_CELLS`^2 cells of configuration space, again
@@ -313,75 +375,211 @@ const TRAP2_DT_S: f64 = 0.008;
 /// elbow), and the distance to a moved outline changes by at most the largest move. The arm
 /// may be anywhere in a run of unblocked cells (8-connected) at once, and reaches every run
 /// touching one cell beyond those it could be in a `TRAP2_DT_S` step before. `Some(t)`
-/// only when even that arm has no cell left at time t. Slow (a few seconds a scene): the
-/// campaign asks it of scenes with collisions only.
+/// only when even that arm has no cell left at time t.
+///
+/// When every disk rests or circles the shoulder (the campaign's scenes) its image only
+/// slides along the diagonal (absolute angles: the polar shift of thesis ch. IV), so each
+/// disk's blocked cells are computed once, at `TRAP2_PHASES` fractions of a cell, and
+/// shifted: the disk then stands up to 1 / (2 `TRAP2_PHASES`) cell round the shoulder from
+/// where the step has it, and is taken smaller by that arc (more generous still; tens of
+/// milliseconds a scene, so the generator can ask it of every moving scene). Other motions
+/// take every cell at every step (a few seconds a scene).
 pub fn trapped_s(start_rad: [f64; 2], obstacles: &[Obstacle], duration_s: f64) -> Option<f64> {
+    trapped_grid_s(start_rad, obstacles, duration_s, true)
+}
+
+/// [`trapped_s`], with its fast form only when `shift` allows it.
+fn trapped_grid_s(
+    start_rad: [f64; 2],
+    obstacles: &[Obstacle],
+    duration_s: f64,
+    shift: bool,
+) -> Option<f64> {
     const N: usize = TRAP2_CELLS;
     let cell = TAU / N as f64;
     let margin = 0.516 * cell / 2.0;
     let idx = |a: f64| (((a + PI) / cell).floor() as i64).rem_euclid(N as i64) as usize;
-    let poses: Vec<Pose> = (0..N * N)
-        .map(|k| {
-            let (i, j) = (k % N, k / N);
-            Pose::new(-PI + (i as f64 + 0.5) * cell, -PI + (j as f64 + 0.5) * cell)
+    let centre = |i: usize| -PI + (i as f64 + 0.5) * cell;
+    // Each disk as (distance from the shoulder, bearing at t = 0, rad/s, radius) when it
+    // keeps its distance.
+    let polar: Option<Vec<(f64, f64, f64, f64)>> = obstacles
+        .iter()
+        .map(|o| {
+            let (d, a) = (
+                o.start.x_m.hypot(o.start.y_m),
+                o.start.y_m.atan2(o.start.x_m),
+            );
+            match o.motion {
+                Motion::Static => Some((d, a, 0.0, o.start.r_m)),
+                Motion::Circle {
+                    cx_m,
+                    cy_m,
+                    period_s,
+                } if cx_m == 0.0 && cy_m == 0.0 => Some((d, a, TAU / period_s, o.start.r_m)),
+                _ => None,
+            }
         })
-        .collect();
-    let mut reach = vec![false; N * N];
-    reach[idx(start_rad[1]) * N + idx(start_rad[0])] = true;
-    let mut free = vec![false; N * N];
-    let mut seen = vec![false; N * N];
-    let mut stack = Vec::new();
-    let steps = (duration_s / TRAP2_DT_S).ceil() as usize;
-    let around = |k: usize| {
-        let (i, j) = ((k % N) as i64, (k / N) as i64);
-        (-1..=1).flat_map(move |dj| {
-            (-1..=1).map(move |di| {
-                ((j + dj).rem_euclid(N as i64) as usize) * N
-                    + (i + di).rem_euclid(N as i64) as usize
+        .collect::<Option<Vec<_>>>()
+        .filter(|_| shift);
+    // The fast form's blocked cells: per disk and phase p, the disk on the x axis turned by
+    // p / TRAP2_PHASES cell, as rows of theta1 bits (row j: theta2 cell j).
+    let masks: Option<Vec<Vec<Row>>> = polar.as_ref().map(|polar| {
+        let f = TRAP2_PHASES as f64;
+        polar
+            .iter()
+            .flat_map(|&(d, _, _, r)| {
+                (0..TRAP2_PHASES).map(move |p| {
+                    let turn = p as f64 / f * cell;
+                    let core = Disk {
+                        x_m: d * turn.cos(),
+                        y_m: d * turn.sin(),
+                        r_m: r - margin - d * cell / (2.0 * f),
+                    };
+                    (0..N)
+                        .map(|j| {
+                            let mut row = [0u64; ROW_WORDS];
+                            for i in 0..N {
+                                if Pose::new(centre(i), centre(j)).clearance_m(&core) <= 0.0 {
+                                    row[i / 64] |= 1 << (i % 64);
+                                }
+                            }
+                            row
+                        })
+                        .collect()
+                })
             })
-        })
+            .collect()
+    });
+    let poses: Vec<Pose> = if masks.is_none() {
+        (0..N * N)
+            .map(|k| Pose::new(centre(k % N), centre(k / N)))
+            .collect()
+    } else {
+        Vec::new()
     };
+    let mut reach = vec![[0u64; ROW_WORDS]; N];
+    let (i0, j0) = (idx(start_rad[0]), idx(start_rad[1]));
+    reach[j0][i0 / 64] |= 1 << (i0 % 64);
+    let mut free = vec![[0u64; ROW_WORDS]; N];
+    let mut next = vec![[0u64; ROW_WORDS]; N];
+    let steps = (duration_s / TRAP2_DT_S).ceil() as usize;
     for step in 0..=steps {
         let t = step as f64 * TRAP2_DT_S;
-        // Each disk less the margin: a cell whose centre touches one is blocked all over.
-        let cores: Vec<Disk> = obstacles
-            .iter()
-            .map(|o| {
-                let d = o.at(t);
-                Disk {
-                    r_m: d.r_m - margin,
-                    ..d
+        match (&polar, &masks) {
+            (Some(polar), Some(masks)) => {
+                let mut blocked = vec![[0u64; ROW_WORDS]; N];
+                for (n, &(_, a0, w, _)) in polar.iter().enumerate() {
+                    // The bearing in phases of a cell: a whole shift k and a phase p.
+                    let q = ((a0 + w * t) / cell * TRAP2_PHASES as f64).round() as i64;
+                    let (k, p) = (
+                        q.div_euclid(TRAP2_PHASES as i64) as usize % N,
+                        q.rem_euclid(TRAP2_PHASES as i64) as usize,
+                    );
+                    let m = &masks[n * TRAP2_PHASES + p];
+                    for (j, b) in blocked.iter_mut().enumerate() {
+                        let r = row_rotl(&m[(j + N - k) % N], k);
+                        for (x, y) in b.iter_mut().zip(r) {
+                            *x |= y;
+                        }
+                    }
                 }
-            })
-            .collect();
-        for (k, f) in free.iter_mut().enumerate() {
-            *f = cores.iter().all(|d| poses[k].clearance_m(d) > 0.0);
-        }
-        // Seeds: free cells within one cell of where the arm could be; then their runs.
-        seen.iter_mut().for_each(|x| *x = false);
-        stack.clear();
-        for (k, _) in reach.iter().enumerate().filter(|(_, &r)| r) {
-            for n in around(k) {
-                if free[n] && !seen[n] {
-                    seen[n] = true;
-                    stack.push(n);
+                for (f, b) in free.iter_mut().zip(&blocked) {
+                    for (x, y) in f.iter_mut().zip(b) {
+                        *x = !y;
+                    }
+                }
+            }
+            _ => {
+                // Each disk less the margin: a cell whose centre touches one is blocked all
+                // over.
+                let cores: Vec<Disk> = obstacles
+                    .iter()
+                    .map(|o| {
+                        let d = o.at(t);
+                        Disk {
+                            r_m: d.r_m - margin,
+                            ..d
+                        }
+                    })
+                    .collect();
+                for (j, f) in free.iter_mut().enumerate() {
+                    *f = [0; ROW_WORDS];
+                    for i in 0..N {
+                        if cores.iter().all(|d| poses[j * N + i].clearance_m(d) > 0.0) {
+                            f[i / 64] |= 1 << (i % 64);
+                        }
+                    }
                 }
             }
         }
-        if stack.is_empty() {
+        // Free cells within one cell of where the arm could be, then grown through free
+        // cells until they stop growing: the runs they are in.
+        row_dilate(&reach, &mut next);
+        let mut any = false;
+        for (x, f) in next.iter_mut().zip(&free) {
+            for (a, b) in x.iter_mut().zip(f) {
+                *a &= b;
+                any |= *a != 0;
+            }
+        }
+        if !any {
             return Some(t);
         }
-        while let Some(k) = stack.pop() {
-            for n in around(k) {
-                if free[n] && !seen[n] {
-                    seen[n] = true;
-                    stack.push(n);
+        loop {
+            row_dilate(&next, &mut reach);
+            let mut grew = false;
+            for ((r, x), f) in reach.iter_mut().zip(&next).zip(&free) {
+                for ((a, b), c) in r.iter_mut().zip(x).zip(f) {
+                    *a &= c;
+                    grew |= *a != *b;
                 }
             }
+            std::mem::swap(&mut reach, &mut next);
+            if !grew {
+                break;
+            }
         }
-        std::mem::swap(&mut reach, &mut seen);
+        std::mem::swap(&mut reach, &mut next);
     }
     None
+}
+
+/// 64-bit words of a row of [`trapped_s`]'s grid.
+const ROW_WORDS: usize = TRAP2_CELLS / 64;
+
+/// A row of [`trapped_s`]'s grid: bit i of word i / 64 is cell i.
+type Row = [u64; ROW_WORDS];
+
+/// `x` turned by `k` cells: bit i of the result is bit (i - k) mod `TRAP2_CELLS` of `x`.
+fn row_rotl(x: &Row, k: usize) -> Row {
+    let (ws, bs) = (k / 64 % ROW_WORDS, k % 64);
+    let mut out = [0; ROW_WORDS];
+    for (w, o) in out.iter_mut().enumerate() {
+        let hi = x[(w + ROW_WORDS - ws) % ROW_WORDS];
+        let lo = x[(w + 2 * ROW_WORDS - ws - 1) % ROW_WORDS];
+        *o = if bs == 0 {
+            hi
+        } else {
+            hi << bs | lo >> (64 - bs)
+        };
+    }
+    out
+}
+
+/// `out` = `x` grown by one cell in each of the 8 directions, round the torus.
+fn row_dilate(x: &[Row], out: &mut [Row]) {
+    const N: usize = TRAP2_CELLS;
+    let wide: Vec<Row> = x
+        .iter()
+        .map(|r| {
+            let (a, b) = (row_rotl(r, 1), row_rotl(r, N - 1));
+            std::array::from_fn(|w| r[w] | a[w] | b[w])
+        })
+        .collect();
+    for (j, o) in out.iter_mut().enumerate() {
+        let (u, v, z) = (&wide[(j + N - 1) % N], &wide[j], &wide[(j + 1) % N]);
+        *o = std::array::from_fn(|w| u[w] | v[w] | z[w]);
+    }
 }
 
 /// What one scene did.
@@ -490,6 +688,8 @@ pub fn run_scene(s: &Scene) -> SceneResult {
 pub struct Summary {
     /// Static or moving.
     pub kind: Kind,
+    /// Where the disks were placed.
+    pub place: Place,
     /// Campaign seed.
     pub seed: u64,
     /// Scenes run.
@@ -592,13 +792,16 @@ pub fn in_parallel<R: Send>(
 /// the same whatever `threads`). `progress` is called after each scene.
 pub fn campaign(
     kind: Kind,
+    place: Place,
     seed: u64,
     n: u64,
     threads: usize,
     progress: &(dyn Fn() + Sync),
 ) -> (Summary, Vec<SceneResult>) {
     let start = std::time::Instant::now();
-    let mut results = in_parallel(n, threads, progress, |i| run_scene(&scene(kind, seed, i)));
+    let mut results = in_parallel(n, threads, progress, |i| {
+        run_scene(&scene(kind, place, seed, i))
+    });
     results.sort_by_key(|r| r.index);
     let mut times: Vec<f64> = results.iter().filter_map(|r| r.goal_time_s).collect();
     times.sort_by(f64::total_cmp);
@@ -618,7 +821,7 @@ pub fn campaign(
     // seconds a scene).
     let unwinnable: Vec<u64> = in_parallel(hits.scenes.len() as u64, threads, &|| {}, |k| {
         let i = hits.scenes[k as usize];
-        let c = scene(kind, seed, i).config;
+        let c = scene(kind, place, seed, i).config;
         trapped_s(c.start_rad, &c.obstacles, c.duration_s).map(|_| i)
     })
     .into_iter()
@@ -628,6 +831,7 @@ pub fn campaign(
     unwinnable.sort_unstable(); // in_parallel returns them in no particular order
     let summary = Summary {
         kind,
+        place,
         seed,
         scenes: n,
         duration_s: kind.duration_s(),
@@ -649,12 +853,13 @@ pub fn campaign(
 }
 
 /// A scenario file that replays scene `s` (`sim-host run`).
-pub fn scenario_text(kind: Kind, seed: u64, s: &Scene) -> String {
+pub fn scenario_text(kind: Kind, place: Place, seed: u64, s: &Scene) -> String {
     scenario_text_titled(
         &format!(
-            "reflex campaign {} scene {} (campaign seed {seed})",
+            "reflex campaign {} scene {} (campaign seed {seed}, disks placed {})",
             kind.name(),
-            s.index
+            s.index,
+            place.name()
         ),
         &s.config,
     )
@@ -712,6 +917,7 @@ pub fn write_summary(out: &Path, summary: &impl Serialize) -> Result<(), String>
 /// with a collision into `out`.
 pub fn run_to_dir(
     kind: Kind,
+    place: Place,
     seed: u64,
     n: u64,
     threads: usize,
@@ -719,7 +925,7 @@ pub fn run_to_dir(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Summary, String> {
     let io = |e: std::io::Error| format!("{}: {e}", out.display());
-    let (summary, results) = campaign(kind, seed, n, threads, progress);
+    let (summary, results) = campaign(kind, place, seed, n, threads, progress);
     write_summary(out, &summary)?;
     let mut csv = String::from(
         "index,collisions,min_clearance_m,goal_time_s,final_error_m,stalled,escape_ms,hold_ms,unmarked_ms\n",
@@ -741,10 +947,10 @@ pub fn run_to_dir(
     }
     std::fs::write(out.join("scenes.csv"), csv).map_err(io)?;
     for &i in &summary.collision_scenes {
-        let s = scene(kind, seed, i);
+        let s = scene(kind, place, seed, i);
         std::fs::write(
             out.join(format!("collision-{i}.toml")),
-            scenario_text(kind, seed, &s),
+            scenario_text(kind, place, seed, &s),
         )
         .map_err(io)?;
     }
@@ -759,14 +965,45 @@ mod tests {
     /// 31 and 43 drew such a start first), and leaves static scenes' starts alone.
     #[test]
     fn moving_scenes_never_start_trapped() {
-        for i in 0..60 {
-            let c = scene(Kind::Moving, 1, i).config;
-            assert_eq!(
-                link1_trapped_s(c.start_rad[0], &c.obstacles, c.duration_s),
-                None,
-                "scene {i}"
-            );
+        for place in [Place::Sensed, Place::Reach] {
+            for i in 0..60 {
+                let c = scene(Kind::Moving, place, 1, i).config;
+                assert_eq!(
+                    link1_trapped_s(c.start_rad[0], &c.obstacles, c.duration_s),
+                    None,
+                    "scene {i} ({place:?})"
+                );
+            }
         }
+    }
+
+    /// Sensed scenes keep every disk's centre inside the calibrated square for the whole
+    /// scene (moving ones round their whole circle); reach scenes put some beyond it.
+    #[test]
+    fn sensed_scenes_keep_their_disks_in_the_calibrated_square() {
+        let inside = crate::optics::FIELD_HALF_M - PLACE_MARGIN_M;
+        let mut outside_in_reach = 0;
+        for kind in [Kind::Static, Kind::Moving] {
+            for i in 0..200 {
+                for place in [Place::Sensed, Place::Reach] {
+                    let c = scene(kind, place, 7, i).config;
+                    for o in &c.obstacles {
+                        let out = (0..64).any(|k| {
+                            let d = o.at(k as f64 * c.duration_s / 63.0);
+                            let c = o.at(k as f64 * 0.1); // a circle's period may be shorter
+                            [d.x_m, d.y_m, c.x_m, c.y_m]
+                                .iter()
+                                .any(|v| v.abs() > inside + 1e-12)
+                        });
+                        match place {
+                            Place::Sensed => assert!(!out, "{kind:?} scene {i}: {o:?}"),
+                            Place::Reach => outside_in_reach += out as u32,
+                        }
+                    }
+                }
+            }
+        }
+        assert!(outside_in_reach > 100, "{outside_in_reach}");
     }
 
     /// Link 1's band is the rectangle's half-width plus the radius seen from the shoulder
@@ -875,5 +1112,30 @@ mod tests {
             }
         }
         assert!(!unmarked_near_arm(&mut sim, a, b, &near));
+    }
+
+    /// The shifted form of the two-angle trap oracle is the grid form made more generous:
+    /// whenever it finds the arm trapped, the grid form does, no later; and it finds traps
+    /// (sensed moving scenes of seed 1 drawn before the generator asked it: 23, 109 and
+    /// 181 collided trapped; on all twelve that collided the two forms agreed but once).
+    #[test]
+    fn the_shifted_trap_oracle_is_the_grid_one_more_generous() {
+        let (mut both, mut grid_only) = (0, 0);
+        // Seed 1's sensed moving scenes that collided, the grid form trapping ten of them.
+        for i in [4u64, 23, 36, 109, 181] {
+            let c = scene_drawn(Kind::Moving, Place::Sensed, 1, i, false).config;
+            let fast = trapped_grid_s(c.start_rad, &c.obstacles, c.duration_s, true);
+            let grid = trapped_grid_s(c.start_rad, &c.obstacles, c.duration_s, false);
+            match (fast, grid) {
+                (Some(f), Some(g)) => {
+                    assert!(g <= f, "scene {i}: {g} s then {f} s");
+                    both += 1;
+                }
+                (Some(f), None) => panic!("scene {i}: shifted trapped at {f} s, grid never"),
+                (None, Some(_)) => grid_only += 1,
+                (None, None) => {}
+            }
+        }
+        assert!(both >= 3, "{both} both, {grid_only} grid only");
     }
 }

@@ -150,6 +150,12 @@ enum Cmd {
         /// (`<out>/scene-I.png`).
         #[arg(long)]
         only: Option<u64>,
+        /// `reflex`: where the disks are: `sensed` keeps their centres inside the camera's
+        /// calibrated 0.7 m square (a moving disk's whole circle); `reach` anywhere
+        /// 0.12-0.55 m from the shoulder, where the sensing can misplace them (default
+        /// sensed).
+        #[arg(long, value_enum)]
+        place: Option<sim_host::campaign::Place>,
         /// `faults` and `demo`: native or image.
         #[arg(long, value_enum, default_value_t = Mode::Native)]
         mode: Mode,
@@ -310,7 +316,13 @@ fn main() -> ExitCode {
             only,
             mode,
             images,
+            place,
         } => {
+            if place.is_some() && what != "reflex" {
+                eprintln!("sim-host: campaign {what}: --place is for the reflex campaign");
+                return ExitCode::from(2);
+            }
+            let place = place.unwrap_or(sim_host::campaign::Place::Sensed);
             let out = out.unwrap_or_else(|| PathBuf::from(format!("out/campaign-{what}")));
             let threads = threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -366,12 +378,15 @@ fn main() -> ExitCode {
                 let bar = indicatif::ProgressBar::new(n);
                 bar.set_message(name);
                 let dir = out.join(name);
-                match sim_host::campaign::run_to_dir(kind, seed, n, threads, &dir, &|| bar.inc(1)) {
+                match sim_host::campaign::run_to_dir(kind, place, seed, n, threads, &dir, &|| {
+                    bar.inc(1)
+                }) {
                     Ok(s) => {
                         bar.finish_and_clear();
                         println!(
-                            "reflex campaign, {name}: {} scenes (seed {seed}), {} with collisions ({} contacts), min clearance {:.1} mm; goals reached {} ({:.1}%), time to goal median {:.2} s, p95 {:.2} s, max {:.2} s; stalled {}; escapes in {} scenes; holds in {}; map unmarked next to the arm in {} scenes ({} ms); {:.0} s wall -> {}",
+                            "reflex campaign, {name}: {} scenes (seed {seed}, disks placed {}), {} with collisions ({} contacts), min clearance {:.1} mm; goals reached {} ({:.1}%), time to goal median {:.2} s, p95 {:.2} s, max {:.2} s; stalled {}; escapes in {} scenes; holds in {}; map unmarked next to the arm in {} scenes ({} ms); {:.0} s wall -> {}",
                             s.scenes,
+                            place.name(),
                             s.scenes_with_collisions,
                             s.collisions,
                             s.min_clearance_m * 1e3,

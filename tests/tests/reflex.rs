@@ -470,21 +470,26 @@ fn the_reflex_images_evasions_match_the_host() {
 
 /// The safety campaign (issue 8): zero collisions in 2,000 random static scenes with the
 /// sensing, C-space, servo and reflex boards, the collision oracle at every plant step
-/// (`sim-host campaign reflex` runs any seed and count).
+/// (`sim-host campaign reflex` runs any seed and count), with the disks where the camera
+/// sees them (the default) and again anywhere the arm reaches.
 #[test]
 fn no_collision_in_2000_random_static_scenes() {
-    use sim_host::campaign::{campaign, Kind};
+    use sim_host::campaign::{campaign, Kind, Place};
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let (s, _) = campaign(Kind::Static, 1, 2000, threads, &|| {});
-    assert_eq!(
-        s.scenes_with_collisions, 0,
-        "collisions in scenes {:?} (replay: sim-host campaign reflex --seed 1)",
-        s.collision_scenes
-    );
-    assert!(s.min_clearance_m > 0.0);
-    // The campaign means something: most goals are reached, some are blocked.
-    assert!(s.goals_reached > 800, "{s:?}");
-    assert!(s.stalled > 0, "{s:?}");
+    for place in [Place::Sensed, Place::Reach] {
+        let (s, _) = campaign(Kind::Static, place, 1, 2000, threads, &|| {});
+        assert_eq!(
+            s.scenes_with_collisions,
+            0,
+            "collisions in scenes {:?} (replay: sim-host campaign reflex --seed 1 --place {})",
+            s.collision_scenes,
+            place.name()
+        );
+        assert!(s.min_clearance_m > 0.0, "{place:?}");
+        // The campaign means something: many goals are reached, some are blocked.
+        assert!(s.goals_reached > 800, "{s:?}");
+        assert!(s.stalled > 0, "{s:?}");
+    }
 }
 
 /// Runs a shipped scenario; returns the flags the reflex published at each millisecond, the
@@ -686,13 +691,13 @@ fn the_reflex_images_known_columns_match_the_host() {
 /// written after the reflex read).
 #[test]
 fn every_published_window_is_free_in_the_map_among_moving_obstacles() {
-    use sim_host::campaign::{scene, Kind};
+    use sim_host::campaign::{scene, Kind, Place};
     use sim_host::sim::Sim;
     use vme_map::records::reflex_flags as rf;
     use vme_map::{BoardSlot, GlobalBus};
     let (mut checked, mut pixels, mut vouched) = (0u64, 0u64, 0u64);
     for index in [3, 71, 108, 250, 400] {
-        let s = scene(Kind::Moving, 1, index);
+        let s = scene(Kind::Moving, Place::Reach, 1, index);
         let mut sim = Sim::new(s.config.clone());
         let beat = |sim: &mut Sim, id: BoardId| sim.bus().read_u32(BoardSlot::of(id).heartbeat());
         let (mut reflex_hb, mut cspace_hb) = (0, 0);
