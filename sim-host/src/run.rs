@@ -149,6 +149,33 @@ pub struct Summary {
     pub boards: Vec<BoardSummary>,
     /// Image mode with the servo as an image: its passes' busy cycles; null otherwise.
     pub servo_busy: Option<ServoBusy>,
+    /// Per obstacle (in the scenario's order), the simulated milliseconds in which the
+    /// sensing board published its position flagged `EXTRAPOLATED`: read beyond the
+    /// camera's calibrated square, where it can be up to 139 mm short of the obstacle and
+    /// the C-space map does not cover the obstacle conservatively (docs/sensing.md).
+    pub obstacles_extrapolated_ms: Vec<u64>,
+}
+
+/// Object-table slot of the scenario's obstacle `k` (five obstacle beacons, then the
+/// instructional robot's).
+pub fn obstacle_beacon(k: usize) -> usize {
+    if k < 5 {
+        vme_map::records::beacon_index::OBSTACLE0 + k
+    } else {
+        vme_map::records::beacon_index::INSTRUCTIONAL
+    }
+}
+
+/// Adds a millisecond to each obstacle of `sim` whose published position is flagged
+/// `EXTRAPOLATED` (an unreadable table counts nothing).
+fn count_extrapolated(sim: &mut Sim, ms: &mut [u64]) {
+    if let Ok((t, _)) = vme_map::OBJECTS.read(&mut sim.bus()) {
+        for (k, n) in ms.iter_mut().enumerate() {
+            let f = t.beacons[obstacle_beacon(k)].flags;
+            let bf = vme_map::records::beacon_flags::EXTRAPOLATED;
+            *n += u64::from(f & bf != 0);
+        }
+    }
 }
 
 /// The trace's header line.
@@ -373,8 +400,13 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     let mut samples = vec![sample(&mut sim)];
     let mut last = LastRecords::default();
     trace_row(&mut sim, &mut last, &mut trace);
+    let ms_every = ((1e-3 / scenario.config.dt_s).round() as u64).max(1);
+    let mut extrapolated_ms = vec![0u64; scenario.config.obstacles.len().min(6)];
     while !sim.done() {
         sim.step();
+        if sim.steps.is_multiple_of(ms_every) {
+            count_extrapolated(&mut sim, &mut extrapolated_ms);
+        }
         if sim.steps.is_multiple_of(opts.trace_every) {
             trace_row(&mut sim, &mut last, &mut trace);
             samples.push(sample(&mut sim));
@@ -401,7 +433,8 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     bar.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
     sim.detach_debugger();
-    let summary = summarize(scenario, &mut sim, wall_s);
+    let mut summary = summarize(scenario, &mut sim, wall_s);
+    summary.obstacles_extrapolated_ms = extrapolated_ms;
     Ok(RunOutput {
         trace,
         summary,
@@ -502,6 +535,7 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
         goal_reached: goal_err.map(|e| e <= 0.01),
         boards,
         servo_busy,
+        obstacles_extrapolated_ms: Vec::new(),
     }
 }
 
