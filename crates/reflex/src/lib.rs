@@ -407,6 +407,10 @@ const STOP_US_PER_U_S_Q24: [i32; 2] = [
     (16_777_216.0 * 1e6 / BRAKE_U_S2[1] as f64) as i32,
 ];
 
+/// [`Reflex`]'s `free_px` before any pass had the arm's neighbourhood free: no arm pixel
+/// is near it, and differences with it do not overflow.
+const NEVER_PX: i32 = 1 << 28;
+
 /// The reflex's state between passes.
 #[derive(Clone, Debug)]
 pub struct Reflex {
@@ -440,6 +444,13 @@ pub struct Reflex {
     pass: u32,
     /// The escape target of the previous pass (unwrapped pixels).
     escape_to: Option<[i32; 2]>,
+    /// The arm's pixel (unwrapped) on the last pass its own neighbourhood was free
+    /// ([`NEVER_PX`] before the first).
+    free_px: [i32; 2],
+    /// An obstacle's image came onto the arm: its own pixel, free on an earlier pass at
+    /// the same place, is marked now; the escape may cross marked pixels until the arm's
+    /// neighbourhood is free again (-1: yes, 0: no).
+    came: i32,
     /// The evasion's last way (each link -1, 0, +1), kept one sample longer.
     evade_dir: [i32; 2],
     /// The evasion's prediction.
@@ -494,6 +505,8 @@ impl Reflex {
             braked_pass: 0,
             pass: 0,
             escape_to: None,
+            free_px: [NEVER_PX; 2],
+            came: 0,
             evade_dir: [0, 0],
             evasion: evade::Scratch::new(),
             scratch: escape::Scratch::new(),
@@ -733,6 +746,7 @@ impl Reflex {
             out.flags |= flags::BLOCKED2 & (grown.blocked[1] as u32).wrapping_neg();
             sub[0] = clamp_into(goal_urad[0], a1.goal, w1, keep);
             sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
+            self.free_here(&a1, &a2);
         } else {
             // An obstacle within the arm's own neighbourhood (wider among moving obstacles)
             // must be evaded; short of that, brake. An arm that has stood still for
@@ -779,6 +793,7 @@ impl Reflex {
                 sub[0] = a1.brake_toward(goal_urad[0]);
                 sub[1] = a2.brake_toward(goal_urad[1]);
                 self.escape_to = None;
+                self.free_here(&a1, &a2);
             } else if !near {
                 // The arrest region meets an obstacle but the arm is clear of it: brake as
                 // hard as the servo can (its setpoint behind its arrest point saturates the
@@ -789,15 +804,26 @@ impl Reflex {
                 sub[0] = a1.hard_brake();
                 sub[1] = a2.hard_brake();
                 self.escape_to = None;
+                self.free_here(&a1, &a2);
             } else {
                 let at = [a1.theta >> 8, a2.theta >> 8];
                 out.window = [(at[0], at[0]), (at[1], at[1])];
+                // The arm on or next to the pixel it last stood on with its neighbourhood
+                // free (it got there through rectangles proven free): whatever is marked
+                // there now came to the arm, moving or not (a disk creeping too slowly for
+                // the sensing board's moving flag walked into an arm held trapped: the demo
+                // with its obstacles in the camera's view). An arm that started in a sliver
+                // never had its neighbourhood free, and still holds.
+                let d0 = masks::abs(at[0].wrapping_sub(self.free_px[0]));
+                let d1 = masks::abs(at[1].wrapping_sub(self.free_px[1]));
+                self.came |= masks::lt(masks::max(d0, d1), 2);
+                let cross = moving | (self.came != 0);
                 match self.escape(
                     map,
                     at,
                     [a1.goal >> 8, a2.goal >> 8],
                     clear_px,
-                    moving,
+                    cross,
                     &mut tests,
                 ) {
                     Some(q) => {
@@ -827,6 +853,14 @@ impl Reflex {
         out.known = self.known.take_vouched();
         self.last = Some(sub);
         out.subgoal_urad = Some(sub);
+    }
+
+    /// The arm's own neighbourhood is free this pass: its pixel is where an image that is
+    /// marked there later came to it ([`Reflex::came`]).
+    #[inline(never)]
+    fn free_here(&mut self, a1: &Axis, a2: &Axis) {
+        self.free_px = [a1.theta >> 8, a2.theta >> 8];
+        self.came = 0;
     }
 
     /// A trapped arm's subgoal `sub` (its arrest point on entry) among `moving` (mask)

@@ -820,3 +820,40 @@ fn a_cleared_output_is_the_empty_one() {
     out.clear();
     assert_eq!(out, Output::EMPTY);
 }
+
+#[test]
+fn an_image_that_comes_onto_a_resting_arm_is_escaped_though_nothing_is_flagged_moving() {
+    // The arm rests in free space; then, with no obstacle flagged moving (a disk creeping
+    // too slowly for the sensing board's flag), the map marks a block over it with free
+    // space 3 pixels to -theta1. The map came to the arm, so it crosses out rather than
+    // hold while the disk walks in (the demo with its obstacles in the camera's view).
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    let mut r = Reflex::default();
+    let mut th = [1.0, 1.0];
+    let (mut escaped, mut trapped) = (0, 0);
+    for k in 1..=80 {
+        if k == 30 {
+            m.block(p - 2, p + 6, p - 6, p + 6);
+        }
+        let inp = Input {
+            servo: Some(servo_at(th, [0.0; 2], k)),
+            goal: planner(th, k),
+            health: healthy(k),
+            obstacles_moving: false,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
+        };
+        let o = r.step(&inp, &mut m.map());
+        if k < 30 {
+            assert_eq!(o.flags & (flags::ESCAPING | flags::TRAPPED), 0, "pass {k}");
+        }
+        escaped += (o.flags & flags::ESCAPING != 0) as u32;
+        trapped += (o.flags & flags::TRAPPED != 0) as u32;
+        th = sub(&o);
+    }
+    assert!(
+        escaped > 0 && trapped == 0,
+        "{escaped} escaping, {trapped} trapped"
+    );
+    assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
+}
