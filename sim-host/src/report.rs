@@ -168,6 +168,9 @@ mod tests {
         // One frame every 50 ms, both ends included.
         assert_eq!(frames.len(), 7);
         assert_eq!(v["summary"]["plant_steps"], s.plant_steps);
+        // The figures table lists the obstacles read beyond the camera's square from it.
+        assert!(v["summary"]["obstacles_extrapolated_ms"].is_array());
+        assert!(html.contains("obstacles_extrapolated_ms"));
         let map = base64::engine::general_purpose::STANDARD
             .decode(frames[6]["map"].as_str().unwrap())
             .unwrap();
