@@ -156,22 +156,12 @@ pub struct Summary {
     pub obstacles_extrapolated_ms: Vec<u64>,
 }
 
-/// Object-table slot of the scenario's obstacle `k` (five obstacle beacons, then the
-/// instructional robot's).
-pub fn obstacle_beacon(k: usize) -> usize {
-    if k < 5 {
-        vme_map::records::beacon_index::OBSTACLE0 + k
-    } else {
-        vme_map::records::beacon_index::INSTRUCTIONAL
-    }
-}
-
 /// Adds a millisecond to each obstacle of `sim` whose published position is flagged
 /// `EXTRAPOLATED` (an unreadable table counts nothing).
 fn count_extrapolated(sim: &mut Sim, ms: &mut [u64]) {
     if let Ok((t, _)) = vme_map::OBJECTS.read(&mut sim.bus()) {
         for (k, n) in ms.iter_mut().enumerate() {
-            let f = t.beacons[obstacle_beacon(k)].flags;
+            let f = t.beacons[crate::sim::obstacle_beacon(k)].flags;
             let bf = vme_map::records::beacon_flags::EXTRAPOLATED;
             *n += u64::from(f & bf != 0);
         }

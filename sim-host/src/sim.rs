@@ -75,6 +75,17 @@ pub enum Motion {
     },
 }
 
+/// The beacon (object-table slot) of a scenario's obstacle `k`: the five obstacle beacons,
+/// then the instructional robot's.
+pub fn obstacle_beacon(k: usize) -> usize {
+    use vme_map::records::beacon_index::{INSTRUCTIONAL, OBSTACLE0};
+    if k < 5 {
+        OBSTACLE0 + k
+    } else {
+        INSTRUCTIONAL
+    }
+}
+
 /// A disk obstacle with its scripted motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Obstacle {
@@ -655,8 +666,7 @@ impl Sim {
         let b = &mut self.sensing_io.optics.beacons;
         *b = [None; 8];
         for (k, d) in self.disks.iter().enumerate() {
-            let slot = if k < 5 { k } else { 7 };
-            b[slot] = Some((d.x_m, d.y_m));
+            b[obstacle_beacon(k)] = Some((d.x_m, d.y_m));
         }
         let [t1, t2] = self.plant.angles_rad();
         b[5] = Some(arm::geometry::tip(t1, t2));

@@ -447,8 +447,8 @@ pub struct Reflex {
     /// The arm's pixel (unwrapped) on the last pass its own neighbourhood was free
     /// ([`NEVER_PX`] before the first).
     free_px: [i32; 2],
-    /// An obstacle's image came onto the arm: its own pixel, free on an earlier pass at
-    /// the same place, is marked now; the escape may cross marked pixels until the arm's
+    /// An obstacle's image came onto the arm: the arm, on or next to [`Reflex::free_px`],
+    /// has its own pixel marked; the escape may cross marked pixels until the arm's
     /// neighbourhood is free again (-1: yes, 0: no).
     came: i32,
     /// The evasion's last way (each link -1, 0, +1), kept one sample longer.
