@@ -154,17 +154,22 @@ pub struct Summary {
     /// camera's calibrated square, where it can be up to 139 mm short of the obstacle and
     /// the C-space map does not cover the obstacle conservatively (docs/sensing.md).
     pub obstacles_extrapolated_ms: Vec<u64>,
+    /// The same for the wand (the goal when no planner runs, the planner's goal
+    /// otherwise): milliseconds the goal came from a position read beyond the square.
+    pub wand_extrapolated_ms: u64,
 }
 
 /// Adds a millisecond to each obstacle of `sim` whose published position is flagged
-/// `EXTRAPOLATED` (an unreadable table counts nothing).
-fn count_extrapolated(sim: &mut Sim, ms: &mut [u64]) {
+/// `EXTRAPOLATED`, and to `wand` when the wand's is (an unreadable table counts nothing).
+fn count_extrapolated(sim: &mut Sim, ms: &mut [u64], wand: &mut u64) {
+    let bf = vme_map::records::beacon_flags::EXTRAPOLATED;
     if let Ok((t, _)) = vme_map::OBJECTS.read(&mut sim.bus()) {
         for (k, n) in ms.iter_mut().enumerate() {
             let f = t.beacons[crate::sim::obstacle_beacon(k)].flags;
-            let bf = vme_map::records::beacon_flags::EXTRAPOLATED;
             *n += u64::from(f & bf != 0);
         }
+        let f = t.beacons[vme_map::records::beacon_index::WAND].flags;
+        *wand += u64::from(f & bf != 0);
     }
 }
 
@@ -392,10 +397,11 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     trace_row(&mut sim, &mut last, &mut trace);
     let ms_every = ((1e-3 / scenario.config.dt_s).round() as u64).max(1);
     let mut extrapolated_ms = vec![0u64; scenario.config.obstacles.len().min(6)];
+    let mut wand_extrapolated_ms = 0;
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(ms_every) {
-            count_extrapolated(&mut sim, &mut extrapolated_ms);
+            count_extrapolated(&mut sim, &mut extrapolated_ms, &mut wand_extrapolated_ms);
         }
         if sim.steps.is_multiple_of(opts.trace_every) {
             trace_row(&mut sim, &mut last, &mut trace);
@@ -425,6 +431,7 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     sim.detach_debugger();
     let mut summary = summarize(scenario, &mut sim, wall_s);
     summary.obstacles_extrapolated_ms = extrapolated_ms;
+    summary.wand_extrapolated_ms = wand_extrapolated_ms;
     Ok(RunOutput {
         trace,
         summary,
@@ -526,6 +533,7 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
         boards,
         servo_busy,
         obstacles_extrapolated_ms: Vec::new(),
+        wand_extrapolated_ms: 0,
     }
 }
 

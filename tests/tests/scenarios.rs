@@ -46,13 +46,14 @@ fn every_shipped_scenario_loads_and_runs_briefly() {
 /// A run counts, per obstacle, the milliseconds the sensing board read it beyond the
 /// camera's calibrated square (flagged `EXTRAPOLATED`), so `sim-host run` can warn that the
 /// map does not cover it: an obstacle 0.45 m out counts nearly every millisecond once the
-/// filters have filled, one 0.25 m out none.
+/// filters have filled, one 0.25 m out none; and the same for a wand 0.42 m out.
 #[test]
 fn a_run_counts_the_milliseconds_an_obstacle_was_read_beyond_the_camera_square() {
     let text =
         "name = \"outside\"\nduration_s = 0.5\nseed = 1\n\n[arm]\nstart_rad = [1.5, 1.5]\n\n\
                 [[obstacle]]\nx_m = 0.45\ny_m = -0.1\nr_m = 0.02\n\n\
-                [[obstacle]]\nx_m = 0.25\ny_m = -0.1\nr_m = 0.02\n";
+                [[obstacle]]\nx_m = 0.25\ny_m = -0.1\nr_m = 0.02\n\n\
+                [wand]\npath = [[0.0, -0.1, 0.42]]\n";
     let s = Scenario::parse(Path::new("outside.toml"), text).unwrap();
     let (_, summary) = sim_host::run::run(
         &s,
@@ -66,4 +67,6 @@ fn a_run_counts_the_milliseconds_an_obstacle_was_read_beyond_the_camera_square()
     assert_eq!(ms.len(), 2);
     assert!(ms[0] > 250 && ms[0] <= 500, "{ms:?}");
     assert_eq!(ms[1], 0, "{ms:?}");
+    let w = summary.wand_extrapolated_ms;
+    assert!(w > 250 && w <= 500, "wand {w}");
 }
