@@ -423,9 +423,9 @@ fn trapped_grid_s(
         .filter(|_| shift);
     // The fast form's blocked cells: per disk and phase p, the disk on the x axis turned by
     // p / TRAP2_PHASES cell, as rows of theta1 bits (row j: theta2 cell j).
-    let masks: Option<Vec<Vec<Row>>> = polar.as_ref().map(|polar| {
+    let fast = polar.map(|polar| {
         let f = TRAP2_PHASES as f64;
-        polar
+        let masks: Vec<Vec<Row>> = polar
             .iter()
             .flat_map(|&(d, _, _, r)| {
                 (0..TRAP2_PHASES).map(move |p| {
@@ -448,9 +448,10 @@ fn trapped_grid_s(
                         .collect()
                 })
             })
-            .collect()
+            .collect();
+        (polar, masks)
     });
-    let poses: Vec<Pose> = if masks.is_none() {
+    let poses: Vec<Pose> = if fast.is_none() {
         (0..N * N)
             .map(|k| Pose::new(centre(k % N), centre(k / N)))
             .collect()
@@ -465,9 +466,10 @@ fn trapped_grid_s(
     let steps = (duration_s / TRAP2_DT_S).ceil() as usize;
     for step in 0..=steps {
         let t = step as f64 * TRAP2_DT_S;
-        match (&polar, &masks) {
-            (Some(polar), Some(masks)) => {
-                let mut blocked = vec![[0u64; ROW_WORDS]; N];
+        match &fast {
+            Some((polar, masks)) => {
+                // The disks' blocked cells or-ed into `free`, then turned round.
+                free.iter_mut().for_each(|f| *f = [0; ROW_WORDS]);
                 for (n, &(_, a0, w, _)) in polar.iter().enumerate() {
                     // The bearing in phases of a cell: a whole shift k and a phase p.
                     let q = ((a0 + w * t) / cell * TRAP2_PHASES as f64).round() as i64;
@@ -476,20 +478,16 @@ fn trapped_grid_s(
                         q.rem_euclid(TRAP2_PHASES as i64) as usize,
                     );
                     let m = &masks[n * TRAP2_PHASES + p];
-                    for (j, b) in blocked.iter_mut().enumerate() {
+                    for (j, b) in free.iter_mut().enumerate() {
                         let r = row_rotl(&m[(j + N - k) % N], k);
                         for (x, y) in b.iter_mut().zip(r) {
                             *x |= y;
                         }
                     }
                 }
-                for (f, b) in free.iter_mut().zip(&blocked) {
-                    for (x, y) in f.iter_mut().zip(b) {
-                        *x = !y;
-                    }
-                }
+                free.iter_mut().flatten().for_each(|x| *x = !*x);
             }
-            _ => {
+            None => {
                 // Each disk less the margin: a cell whose centre touches one is blocked all
                 // over.
                 let cores: Vec<Disk> = obstacles

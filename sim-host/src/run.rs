@@ -159,17 +159,24 @@ pub struct Summary {
     pub wand_extrapolated_ms: u64,
 }
 
+/// A run's milliseconds of positions read beyond the camera's square ([`Summary`]'s
+/// `obstacles_extrapolated_ms` and `wand_extrapolated_ms`).
+struct Extrapolated {
+    obstacles_ms: Vec<u64>,
+    wand_ms: u64,
+}
+
 /// Adds a millisecond to each obstacle of `sim` whose published position is flagged
-/// `EXTRAPOLATED`, and to `wand` when the wand's is (an unreadable table counts nothing).
-fn count_extrapolated(sim: &mut Sim, ms: &mut [u64], wand: &mut u64) {
+/// `EXTRAPOLATED`, and to the wand when its is (an unreadable table counts nothing).
+fn count_extrapolated(sim: &mut Sim, ex: &mut Extrapolated) {
     let bf = vme_map::records::beacon_flags::EXTRAPOLATED;
     if let Ok((t, _)) = vme_map::OBJECTS.read(&mut sim.bus()) {
-        for (k, n) in ms.iter_mut().enumerate() {
+        for (k, n) in ex.obstacles_ms.iter_mut().enumerate() {
             let f = t.beacons[crate::sim::obstacle_beacon(k)].flags;
             *n += u64::from(f & bf != 0);
         }
         let f = t.beacons[vme_map::records::beacon_index::WAND].flags;
-        *wand += u64::from(f & bf != 0);
+        ex.wand_ms += u64::from(f & bf != 0);
     }
 }
 
@@ -396,12 +403,14 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     let mut last = LastRecords::default();
     trace_row(&mut sim, &mut last, &mut trace);
     let ms_every = ((1e-3 / scenario.config.dt_s).round() as u64).max(1);
-    let mut extrapolated_ms = vec![0u64; scenario.config.obstacles.len().min(6)];
-    let mut wand_extrapolated_ms = 0;
+    let mut extrapolated = Extrapolated {
+        obstacles_ms: vec![0; scenario.config.obstacles.len().min(6)],
+        wand_ms: 0,
+    };
     while !sim.done() {
         sim.step();
         if sim.steps.is_multiple_of(ms_every) {
-            count_extrapolated(&mut sim, &mut extrapolated_ms, &mut wand_extrapolated_ms);
+            count_extrapolated(&mut sim, &mut extrapolated);
         }
         if sim.steps.is_multiple_of(opts.trace_every) {
             trace_row(&mut sim, &mut last, &mut trace);
@@ -429,9 +438,7 @@ pub fn run_sampled(scenario: &Scenario, opts: &RunOptions) -> Result<RunOutput, 
     bar.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
     sim.detach_debugger();
-    let mut summary = summarize(scenario, &mut sim, wall_s);
-    summary.obstacles_extrapolated_ms = extrapolated_ms;
-    summary.wand_extrapolated_ms = wand_extrapolated_ms;
+    let summary = summarize(scenario, &mut sim, wall_s, extrapolated);
     Ok(RunOutput {
         trace,
         summary,
@@ -465,7 +472,7 @@ impl End {
     }
 }
 
-fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
+fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64, ex: Extrapolated) -> Summary {
     let t = sim.t_s();
     let goal_err = sim.cfg.wand.at(t).map(|(x, y)| {
         let [a, b] = sim.plant.angles_rad();
@@ -532,8 +539,8 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64) -> Summary {
         goal_reached: goal_err.map(|e| e <= 0.01),
         boards,
         servo_busy,
-        obstacles_extrapolated_ms: Vec::new(),
-        wand_extrapolated_ms: 0,
+        obstacles_extrapolated_ms: ex.obstacles_ms,
+        wand_extrapolated_ms: ex.wand_ms,
     }
 }
 
