@@ -290,6 +290,7 @@ fn obstacles<G: GlobalBus>(
         o.r_um = worklist::radius(g, i as u32);
         o.vx_um_s = sx * K;
         o.vy_um_s = sy * K;
+        o.t_us = beacon_word(objects, b, 2);
         i += 1;
     }
 }

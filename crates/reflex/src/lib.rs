@@ -290,6 +290,8 @@ pub struct ObstacleView {
     pub vx_um_s: i32,
     /// Velocity y, micrometres per second.
     pub vy_um_s: i32,
+    /// The sensing board's time of the position, microseconds.
+    pub t_us: u32,
 }
 
 impl ObstacleView {
@@ -301,6 +303,7 @@ impl ObstacleView {
         r_um: 0,
         vx_um_s: 0,
         vy_um_s: 0,
+        t_us: 0,
     };
 }
 
@@ -451,10 +454,15 @@ pub struct Reflex {
     /// has its own pixel marked; the escape may cross marked pixels until the arm's
     /// neighbourhood is free again (-1: yes, 0: no).
     came: i32,
-    /// The evasion's last way (each link -1, 0, +1), kept one sample longer.
+    /// The evasion's last way (each link's speed multiple, `evade::WAY_MULT`), kept one
+    /// sample longer.
     evade_dir: [i32; 2],
     /// The evasion's prediction.
     evasion: evade::Scratch,
+    /// The obstacles' positions over the last ~150 ms, for their velocities.
+    tracks: evade::Tracks,
+    /// The obstacles with the tracks' velocities, for the evasion.
+    tracked: [ObstacleView; OBSTACLES],
     /// The escape's bitmaps.
     scratch: escape::Scratch,
     /// The runs of rows read free in earlier passes, by column (`window::Known`).
@@ -509,6 +517,8 @@ impl Reflex {
             came: 0,
             evade_dir: [0, 0],
             evasion: evade::Scratch::new(),
+            tracks: evade::Tracks::new(),
+            tracked: [ObstacleView::NONE; OBSTACLES],
             scratch: escape::Scratch::new(),
             known: window::Known::new(),
             react_u: fx::host_mul_shr(cfg.border_px_s * PIX_U, REACT_US * US_TO_S_Q32, 32),
@@ -657,6 +667,9 @@ impl Reflex {
         // Logged only on passes that got this far (a pass that holds needs no log).
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
+        if inp.obstacles_moving {
+            self.tracks.update(&inp.obstacles);
+        }
         self.window(sv, goal, pass_us, inp, map, out);
     }
 
@@ -864,8 +877,9 @@ impl Reflex {
     }
 
     /// A trapped arm's subgoal `sub` (its arrest point on entry) among `moving` (mask)
-    /// obstacles: the way that keeps clear of their predicted disks longest (staying put if
-    /// that lasts as long as any). Apart from [`Reflex::window`], and the flag a mask: the
+    /// obstacles: the way that keeps off their predicted disks longest, then keeps the
+    /// margin longest (`evade::best`; staying put if that does as well as any), a step of
+    /// `evade::way_step_u` for its speed. Apart from [`Reflex::window`], and the flag a mask: the
     /// compiled branch on `moving` there tested a register copy's flags once the window
     /// read the known columns (docs/toolchain.md, class 1).
     #[inline(never)]
@@ -881,14 +895,15 @@ impl Reflex {
         if moving == 0 {
             return;
         }
-        evade::prepare(&mut self.evasion, &sv.theta_urad, obstacles);
+        self.tracks.apply(obstacles, &mut self.tracked);
+        evade::prepare(&mut self.evasion, &sv.theta_urad, &self.tracked);
         let mut b = [0; 3];
-        evade::best(&self.evasion, &self.evade_dir, &mut b);
+        evade::best(&mut self.evasion, &self.evade_dir, &mut b);
         self.evade_dir = [b[0], b[1]];
         if b[0] | b[1] != 0 {
             out.flags |= flags::EVADING;
-            sub[0] = u_to_urad(theta_u[0] + b[0] * ESCAPE_STEP_U);
-            sub[1] = u_to_urad(theta_u[1] + b[1] * ESCAPE_STEP_U);
+            sub[0] = u_to_urad(theta_u[0] + evade::way_step_u(0, b[0]));
+            sub[1] = u_to_urad(theta_u[1] + evade::way_step_u(1, b[1]));
         }
     }
 

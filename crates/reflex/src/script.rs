@@ -157,12 +157,13 @@ pub fn scripted_escape<M: Map + ?Sized>(
 }
 
 /// Words of one evasion question ([`scripted_evade`]): the arm's angles (2, urad), the
-/// previous way (2), then [`crate::OBSTACLES`] obstacles of six words each (valid 0/1, x,
-/// y, radius in um, velocity x, y in um/s).
-pub const EVADE_IN_WORDS: usize = 4 + 6 * crate::OBSTACLES;
-/// Words of one evasion answer: the best way (2), how long it lasts, then how long each of
-/// the nine ways lasts (link 1 -1, 0, +1 outer, link 2 inner).
-pub const EVADE_OUT_WORDS: usize = 3 + 9;
+/// previous way (2), whether to score every way too (0/1), then [`crate::OBSTACLES`]
+/// obstacles of six words each (valid 0/1, x, y, radius in um, velocity x, y in um/s).
+pub const EVADE_IN_WORDS: usize = 5 + 6 * crate::OBSTACLES;
+/// Words of one evasion answer: the best way (2), its score, then each of the 49 ways'
+/// score ([`crate::evade::score`]; link 1's way outer, link 2's inner, in the order of
+/// [`crate::evade::WAY_MULT`]) if asked, else zeros (the reflex's own work: its cycles).
+pub const EVADE_OUT_WORDS: usize = 3 + crate::evade::WAYS * crate::evade::WAYS;
 
 /// Answers one evasion question ([`crate::evade`]) from the words `w` with the arrays `s`;
 /// writes `out`. For the image's probe `reflex_probe_evade` and the system tests.
@@ -176,7 +177,7 @@ pub fn scripted_evade(
     let mut i = 0;
     while i < crate::OBSTACLES {
         let o = &mut obs[i];
-        let b = 4 + 6 * i;
+        let b = 5 + 6 * i;
         o.valid = w[b] != 0;
         o.x_um = w[b + 1];
         o.y_um = w[b + 2];
@@ -192,11 +193,21 @@ pub fn scripted_evade(
     out[0] = b[0];
     out[1] = b[1];
     out[2] = b[2];
+    const N: usize = crate::evade::WAYS;
+    let mut k = 3;
+    while k < EVADE_OUT_WORDS {
+        out[k] = 0;
+        k += 1;
+    }
+    // Every way only if asked: the loop runs no row otherwise (a bound, not a branch:
+    // docs/toolchain.md, class 1).
+    let rows = (N as i32 & -w[4]) as usize;
     let mut a = 0;
-    while a < 3 {
+    while a < rows {
         let mut c = 0;
-        while c < 3 {
-            out[3 + 3 * a + c] = crate::evade::lasts(s, &[a as i32 - 1, c as i32 - 1]) as i32;
+        while c < N {
+            let d = [crate::evade::WAY_MULT[a], crate::evade::WAY_MULT[c]];
+            out[3 + N * a + c] = crate::evade::score(s, &d) as i32;
             c += 1;
         }
         a += 1;
