@@ -668,7 +668,7 @@ impl Reflex {
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
         if inp.obstacles_moving {
-            self.tracks.update(&inp.obstacles);
+            self.tracks.update(self.now_us, &inp.obstacles);
         }
         self.window(sv, goal, pass_us, inp, map, out);
     }
