@@ -442,9 +442,23 @@ fn the_reflex_images_evasions_match_the_host() {
     }
     let mut sc = reflex::evade::Scratch::new();
     let mut obs = [reflex::ObstacleView::NONE; reflex::OBSTACLES];
-    let host = host_each::<i32, EVADE_IN_WORDS, EVADE_OUT_WORDS>(&asks, |w, o| {
-        scripted_evade(&mut sc, w, &mut obs, o)
-    });
+    // The host's answers, and the image's cycles for the same (checked against them).
+    let mut answer = |asks: &[i32], what: &str| {
+        let host = host_each::<i32, EVADE_IN_WORDS, EVADE_OUT_WORDS>(asks, |w, o| {
+            scripted_evade(&mut sc, w, &mut obs, o)
+        });
+        let cycles = probe_each(
+            &img,
+            &mut global,
+            "reflex_probe_evade",
+            asks,
+            EVADE_IN_WORDS,
+            &host,
+            what,
+        );
+        (host, cycles)
+    };
+    let (host, _) = answer(&asks, "evasion");
     let horizon = reflex::evade::STEPS as i32 - 1;
     // Scores: samples to contact times 32 plus samples to the margin.
     let at_once = host
@@ -463,31 +477,11 @@ fn the_reflex_images_evasions_match_the_host() {
         "{at_once} with a way touching at once, {through} with one lasting, {moved} moving, \
          speeds chosen {speeds:?}"
     );
-    probe_each(
-        &img,
-        &mut global,
-        "reflex_probe_evade",
-        &asks,
-        EVADE_IN_WORDS,
-        &host,
-        "evasion",
-    );
     // Again with the best way alone, as the reflex asks: its cycles.
     for a in asks.chunks_mut(EVADE_IN_WORDS) {
         a[4] = 0;
     }
-    let host = host_each::<i32, EVADE_IN_WORDS, EVADE_OUT_WORDS>(&asks, |w, o| {
-        scripted_evade(&mut sc, w, &mut obs, o)
-    });
-    let cycles = probe_each(
-        &img,
-        &mut global,
-        "reflex_probe_evade",
-        &asks,
-        EVADE_IN_WORDS,
-        &host,
-        "evasion (best way)",
-    );
+    let (_, cycles) = answer(&asks, "evasion (best way)");
     let mean = cycles.iter().sum::<u64>() / n as u64;
     let worst = cycles.iter().max().unwrap();
     eprintln!(
