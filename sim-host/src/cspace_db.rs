@@ -21,8 +21,12 @@ use std::fmt::Write as _;
 
 /// Disk radii the families are built for, millimetres: a 2 mm pin (the thesis's point
 /// obstacles), quarter-inch steps to the thesis's 2-inch obstacles (25.4 mm + the polar
-/// margin), and two larger ones that cover swept (moving) obstacles.
-pub const FAMILY_RADII_MM: [f64; 7] = [1.0, 6.5, 13.0, 19.5, 26.0, 38.5, 51.0];
+/// margin), two larger ones that cover swept (moving) obstacles, and three for the disks
+/// that cover a reading beyond the calibrated square with its fold
+/// (`cspace::worklist::folded`: up to 150 mm for the campaign's 35 mm disks, swept).
+pub const FAMILY_RADII_MM: [f64; 11] = [
+    1.0, 6.5, 13.0, 19.5, 26.0, 38.5, 51.0, 76.5, 102.0, 153.0, 204.0,
+];
 /// Where the generated tables live, from the workspace root.
 pub const TABLES_PATH: &str = "crates/cspace/src/tables.rs";
 /// Spacing of the stored radii, metres.

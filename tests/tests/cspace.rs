@@ -265,3 +265,43 @@ fn a_torn_object_table_is_a_fault_only_when_it_stays_torn() {
         Some(vme_map::BoardState::Running)
     );
 }
+
+/// `cspace::worklist::REACH_UM`, where a fold beyond the calibrated square ends, is the
+/// outline's reach from the shoulder (the tip's disk), not less.
+#[test]
+fn the_fold_reach_is_the_outlines() {
+    // The reach is the outline's: the tip's disk, the farthest part from the shoulder.
+    let reach_m = arm::geometry::OUTLINE
+        .iter()
+        .map(|(body, part)| match (body, part) {
+            (arm::geometry::Body::Link2, arm::geometry::Part::Disk { s_m, r_m }) => {
+                arm::geometry::L1_M + s_m.abs() + r_m
+            }
+            (
+                _,
+                arm::geometry::Part::Rect {
+                    s0_m,
+                    s1_m,
+                    half_width_m,
+                },
+            ) => {
+                let s = s0_m.abs().max(s1_m.abs());
+                let along = if matches!(body, arm::geometry::Body::Link2) {
+                    arm::geometry::L1_M + s
+                } else {
+                    s
+                };
+                along.hypot(*half_width_m)
+            }
+            (_, arm::geometry::Part::Disk { s_m, r_m }) => s_m.abs() + r_m,
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        cspace::worklist::REACH_UM as f64 >= reach_m * 1e6 - 0.5,
+        "{reach_m}"
+    );
+    assert!(
+        (cspace::worklist::REACH_UM as f64) < reach_m * 1e6 + 1_000.0,
+        "{reach_m}"
+    );
+}

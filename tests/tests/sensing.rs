@@ -418,15 +418,23 @@ fn the_table_of_a_full_thesis_firmware_scan_inverts_inside_the_scanned_area() {
 /// and one 0.56-0.575 m out can read just inside the square, over 200 mm short (measured
 /// 2026-11-26 over this grid). The map is only as conservative as those positions, so
 /// consumers must be able to tell them: within [`TOUCH_M`] of the shoulder every valid
-/// position more than 3 mm off the truth carries `EXTRAPOLATED`, and nothing inside the
-/// square does. (The reflex campaign's moving disks circle up to 0.55 m out; the readings
+/// position more than 3 mm off the truth carries `EXTRAPOLATED`, nothing inside the
+/// square does, and the disk the C-space boards draw for a flagged reading
+/// (`cspace::worklist::folded`) holds the beacon. (The reflex campaign's moving disks circle up to 0.55 m out; the readings
 /// of beacons farther out land inward of them, where they mark space no disk occupies but
 /// hide none the arm can touch; docs/reflex.md.)
 #[test]
 fn positions_beyond_the_calibrated_square_are_flagged_extrapolated() {
     /// The farthest a disk's centre can be and still touch the arm: the outline's reach
-    /// (the tip's disk, 0.515 m) plus the campaign's largest disk (35 mm).
+    /// (the tip's disk, 0.515 m) plus the campaign's largest disk (35 mm, `R_UM`).
     const TOUCH_M: f64 = 0.55;
+    /// That disk's radius, micrometres.
+    const R_UM: i32 = 35_000;
+    assert_eq!(
+        (TOUCH_M * 1e6).round() as i32,
+        cspace::worklist::REACH_UM + R_UM,
+        "the reach is the C-space boards'"
+    );
     let mut sim = system(OpticsConfig::default(), Calibration::Model, 1);
     sensing_bench::configure(&mut sim, vme_map::records::sensing_options::DEFAULT);
     let rest = sensing_cal::ik(0.0, 0.3).unwrap();
@@ -443,6 +451,8 @@ fn positions_beyond_the_calibrated_square_are_flagged_extrapolated() {
     const SLOTS: [usize; 7] = sensing_bench::SURVEY_BEACONS;
     let (mut worst_plain_mm, mut worst_flagged_mm, mut flagged, mut invalid) = (0f64, 0f64, 0, 0);
     let mut beyond_far_off = 0;
+    let mut worst_fold_slack_mm = f64::INFINITY;
+    let area = cspace::worklist::calibrated_area(&mut sim.bus());
     for chunk in pts.chunks(SLOTS.len()) {
         for (k, p) in chunk.iter().enumerate() {
             place(&mut sim, SLOTS[k], *p);
@@ -465,6 +475,18 @@ fn positions_beyond_the_calibrated_square_are_flagged_extrapolated() {
                 flagged += 1;
                 if touch {
                     worst_flagged_mm = worst_flagged_mm.max(err_mm);
+                    // The C-space boards draw the reading folded: the disk they draw for
+                    // an obstacle of radius r holds the beacon's true disk.
+                    let fold = cspace::worklist::fold_of(b.x_um, b.y_um, b.flags, &area);
+                    let d = cspace::worklist::folded(b.x_um, b.y_um, R_UM, fold);
+                    let off_um = (p[0] * 1e6 - d.x_um as f64).hypot(p[1] * 1e6 - d.y_um as f64);
+                    let spare_um = d.r_um as f64 - off_um - R_UM as f64;
+                    assert!(
+                        spare_um >= 0.0,
+                        "{p:?} read ({x:.4}, {y:.4}): the folded disk misses it by {:.0} um",
+                        -spare_um
+                    );
+                    worst_fold_slack_mm = worst_fold_slack_mm.min(spare_um * 1e-3);
                 }
             } else if touch {
                 assert!(
@@ -482,7 +504,8 @@ fn positions_beyond_the_calibrated_square_are_flagged_extrapolated() {
     println!(
         "{} points: {flagged} flagged extrapolated (within {TOUCH_M} m worst {worst_flagged_mm:.1} \
          mm off), {invalid} invalid, {beyond_far_off} beyond {TOUCH_M} m read more than 3 mm \
-         inward unflagged, the rest within {worst_plain_mm:.2} mm",
+         inward unflagged, the rest within {worst_plain_mm:.2} mm; the folded disks hold \
+         every flagged beacon within reach with {worst_fold_slack_mm:.1} mm to spare at least",
         pts.len()
     );
     // The grid reaches where the fold is (a test that never met it would prove nothing).

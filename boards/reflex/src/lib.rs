@@ -267,8 +267,10 @@ fn moving(t: &[u32; OBJECT_WORDS]) -> bool {
 const _: () = assert!(reflex::OBSTACLES == OBSTACLE_BEACONS.len());
 
 /// The obstacles for the evasion (`reflex::evade`): the sensing board's positions, the
-/// host's radii (0: the default cylinder), the C-space boards' sweep estimates (the
-/// entry's last word: mm over the look-ahead, x and y in 16 bits each) as velocities.
+/// host's radii (0: the default cylinder), a reading beyond the calibrated square as the
+/// disk over its fold (`cspace::worklist::folded`, what the C-space boards draw), the
+/// C-space boards' sweep estimates (the entry's last word: mm over the look-ahead, x and y
+/// in 16 bits each) as velocities.
 #[inline(never)]
 fn obstacles<G: GlobalBus>(
     v: &mut [reflex::ObstacleView; reflex::OBSTACLES],
@@ -276,6 +278,7 @@ fn obstacles<G: GlobalBus>(
     objects: &[u32; OBJECT_WORDS],
     ok: bool,
 ) {
+    let area = worklist::calibrated_area(g);
     let mut i = 0;
     while i < reflex::OBSTACLES {
         let b = OBSTACLE_BEACONS[i] as usize;
@@ -283,11 +286,19 @@ fn obstacles<G: GlobalBus>(
         let (sx, sy) = worklist::drawn_sweep_mm(g, i as u32);
         // mm over the look-ahead to um/s.
         const K: i32 = 1000 * 1000 / worklist::LOOKAHEAD_MS;
+        // A reading beyond the calibrated square as the C-space boards draw it: the disk
+        // over its fold.
+        let (x, y) = (
+            beacon_word(objects, b, 0) as i32,
+            beacon_word(objects, b, 1) as i32,
+        );
+        let fold = worklist::fold_of(x, y, beacon_word(objects, b, 3), &area);
+        let d = worklist::folded(x, y, worklist::radius(g, i as u32), fold);
         let o = &mut v[i];
         o.valid = valid;
-        o.x_um = beacon_word(objects, b, 0) as i32;
-        o.y_um = beacon_word(objects, b, 1) as i32;
-        o.r_um = worklist::radius(g, i as u32);
+        o.x_um = d.x_um;
+        o.y_um = d.y_um;
+        o.r_um = d.r_um;
         o.vx_um_s = sx * K;
         o.vy_um_s = sy * K;
         o.t_us = beacon_word(objects, b, 2);

@@ -348,3 +348,117 @@ proptest! {
         }
     }
 }
+
+/// The calibrated square the fold tests write into the calibration header (the model's).
+const AREA_UM: [i32; 4] = [-350_000, 350_000, -350_000, 350_000];
+
+#[test]
+fn only_extrapolated_readings_fold_and_only_past_the_sides_they_lie_beyond() {
+    use vme_map::records::beacon_flags::{EXTRAPOLATED, VALID};
+    let f = |x, y, flags| worklist::fold_of(x, y, flags, &AREA_UM);
+    // Inside, or outside without the flag: no fold.
+    assert_eq!(f(0, 0, VALID | EXTRAPOLATED), 0);
+    assert_eq!(f(450_000, 0, VALID), 0);
+    // One bit a side.
+    assert_eq!(f(450_000, 0, VALID | EXTRAPOLATED), 1 << 1);
+    assert_eq!(f(-450_000, 10_000, VALID | EXTRAPOLATED), 1 << 2);
+    assert_eq!(f(0, 400_000, VALID | EXTRAPOLATED), 1 << 3);
+    assert_eq!(f(-5_000, -360_000, VALID | EXTRAPOLATED), 1 << 4);
+    assert_eq!(
+        f(360_000, -360_000, VALID | EXTRAPOLATED),
+        (1 << 1) | (1 << 4)
+    );
+    // The folded disk of no fold is the disk as read.
+    let d = worklist::folded(1, 2, 3, 0);
+    assert_eq!((d.x_um, d.y_um, d.r_um), (1, 2, 3));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// The folded disk holds a disk of the same radius anywhere along the fold (outward
+    /// from the reading to REACH_UM + r, at most FOLD_MAX_UM, past one side;
+    /// FOLD_CORNER_UM along both past a corner) and up to FOLD_SIDE_UM across it.
+    #[test]
+    fn the_folded_disk_covers_the_fold(
+        side in 0u8..8, along in -349_000i32..349_000, past in 1i32..200_000,
+        r in 1_000i32..40_000, a in 0.0f64..=1.0, b in 0.0f64..=1.0, l in -1.0f64..=1.0,
+    ) {
+        use vme_map::records::beacon_flags::{EXTRAPOLATED, VALID};
+        // A reading past one side (0-3) or a corner (4-7).
+        let out = 350_000 + past;
+        let (x, y) = match side {
+            0 => (out, along), 1 => (-out, along), 2 => (along, out), 3 => (along, -out),
+            4 => (out, out), 5 => (-out, out), 6 => (out, -out), _ => (-out, -out),
+        };
+        let bits = worklist::fold_of(x, y, VALID | EXTRAPOLATED, &AREA_UM);
+        let d = worklist::folded(x, y, r, bits);
+        let (sx, sy) = (x.signum() as f64, y.signum() as f64);
+        let side_um = worklist::FOLD_SIDE_UM as f64 * l;
+        let (tx, ty) = if side < 4 {
+            let at = if side < 2 { x.abs() } else { y.abs() };
+            let reach = (worklist::REACH_UM + r - at).clamp(0, worklist::FOLD_MAX_UM);
+            let f = reach as f64 * a;
+            match side {
+                0 | 1 => (x as f64 + sx * f, y as f64 + side_um),
+                _ => (x as f64 + side_um, y as f64 + sy * f),
+            }
+        } else {
+            let f = worklist::FOLD_CORNER_UM as f64;
+            (x as f64 + sx * f * a + side_um * core::f64::consts::FRAC_1_SQRT_2, y as f64 + sy * f * b - side_um * core::f64::consts::FRAC_1_SQRT_2)
+        };
+        let reach = (tx - d.x_um as f64).hypot(ty - d.y_um as f64) + r as f64;
+        prop_assert!(reach <= d.r_um as f64, "{reach} beyond {}", d.r_um);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+
+    /// Jobs on readings that go in and out of the calibrated square, flagged extrapolated
+    /// beyond it: after every job the map holds exactly the image of the entry's recorded
+    /// position folded as recorded, and a reading whose fold changed is redrawn at once.
+    #[test]
+    fn jobs_draw_an_extrapolated_reading_over_its_fold(
+        start in (300_000i32..420_000, -200_000i32..200_000),
+        moves in prop::collection::vec((-30_000i32..30_000, -30_000i32..30_000), 1..12),
+    ) {
+        use vme_map::records::{beacon_flags, cal, ObjectTable};
+        let mut global = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
+        {
+            use vme_map::GlobalBus;
+            let mut g = vme_map::ArrayBus::new(&mut global);
+            for (k, &v) in AREA_UM.iter().enumerate() {
+                g.write_u32(vme_map::layout::SENSING_CAL + 4 * (cal::W_AREA + k as u32), v as u32);
+            }
+        }
+        let mut sc = Box::new(worklist::Scratch::new());
+        let (mut x, mut y) = start;
+        for (k, &(dx, dy)) in moves.iter().enumerate() {
+            (x, y) = (x + dx, y + dy);
+            let beyond = x.abs() > AREA_UM[1] + 5_000 || y.abs() > AREA_UM[3] + 5_000;
+            let mut t = ObjectTable { frame: k as u32 + 1, ..Default::default() };
+            let b = &mut t.beacons[worklist::OBSTACLE_BEACONS[0] as usize];
+            let flags = beacon_flags::VALID | if beyond { beacon_flags::EXTRAPOLATED } else { 0 };
+            (b.x_um, b.y_um, b.t_us, b.flags) = (x, y, 1_000 * (k as u32 + 1), flags);
+            for _ in 0..worklist::OBSTACLE_BEACONS.len() {
+                let mut g = vme_map::ArrayBus::new(&mut global);
+                let out = worklist::step(&mut g, 1, &t, &mut sc);
+                prop_assert_eq!(out.flags, Flags::default());
+                prop_assert!(out.error.is_none(), "{:?}", out.error);
+            }
+            let e = worklist::entry(&mut vme_map::ArrayBus::new(&mut global), 0);
+            let fold = e.state & worklist::FOLD_MASK;
+            prop_assert_eq!(fold, worklist::fold_of(x, y, flags, &AREA_UM), "fold after move {}", k);
+            prop_assert_eq!((e.x_um, e.y_um), (x, y));
+            let mut want = Memory::default();
+            let d = worklist::folded(e.x_um, e.y_um, e.r_um, fold);
+            if let Ok(im) = images(&d) {
+                apply(&im, &mut want.canvas(), Op::Draw);
+            }
+            let (map, stripes) = bus_map(&mut global);
+            prop_assert!(map == want.map.to_vec(), "map after move {}", k);
+            prop_assert!(stripes == want.stripes.to_vec(), "stripes after move {}", k);
+        }
+    }
+}

@@ -51,6 +51,103 @@ pub const MAX_COVER: usize = 8;
 pub const DRAWN: u32 = 1;
 /// [`WorkEntry::state`] counts the redraws in its bits 8..32.
 pub const JOB_SHIFT: u32 = 8;
+/// Bits 1-4 of [`WorkEntry::state`]: the fold the image was drawn with ([`fold_of`]),
+/// outward along +x, -x, +y, -y.
+pub const FOLD_MASK: u32 = 0x1E;
+/// How far from the shoulder the arm's outline reaches (the tip's disk, 0.515 m; a test
+/// checks it against `arm::geometry`): a disk of radius r whose centre lies farther than
+/// this plus r cannot touch the arm, wherever the sensing board reads it.
+pub const REACH_UM: i32 = 515_000;
+/// The longest fold drawn along one axis ([`folded`]).
+pub const FOLD_MAX_UM: i32 = 200_000;
+/// Past a corner of the calibrated square, the fold along each axis (there readings are
+/// within 9 mm of the truth, some of them a little inward: measured by the test below).
+pub const FOLD_CORNER_UM: i32 = 20_000;
+/// Across the fold: how far a beacon may lie off the fold's axis beyond what the folded
+/// disk already covers.
+pub const FOLD_SIDE_UM: i32 = 30_000;
+
+/// The fold of a beacon read at (`x_um`, `y_um`) with `flags`, against the calibrated
+/// square `area_um` (x min, x max, y min, y max: the calibration table's header): for a
+/// reading the sensing board flags `EXTRAPOLATED`, the sides of the square it lies
+/// beyond, as [`FOLD_MASK`] bits; 0 otherwise. Masks from signs, no compare (their flags
+/// were clobbered on the 68k; docs/toolchain.md class 1).
+#[inline(never)]
+pub fn fold_of(x_um: i32, y_um: i32, flags: u32, area_um: &[i32; 4]) -> u32 {
+    let ext = (flags >> beacon_flags::EXTRAPOLATED.trailing_zeros()) & 1;
+    let beyond = |d: i32| ((d >> 31) & 1) as u32;
+    let bits = (beyond(area_um[1] - x_um) << 1)
+        | (beyond(x_um - area_um[0]) << 2)
+        | (beyond(area_um[3] - y_um) << 3)
+        | (beyond(y_um - area_um[2]) << 4);
+    bits & ext.wrapping_neg()
+}
+
+/// The disk that covers an obstacle of radius `r_um` read at (`x_um`, `y_um`) wherever the
+/// fold `bits` ([`fold_of`]) may have put it. Beyond one side of the calibrated square the
+/// detector's edge folds the spot back: a beacon the arm can touch reads up to ~140 mm
+/// short along that axis (`tests/tests/sensing.rs` measures the optical model and holds
+/// this disk to it), so the fold runs outward from the reading to where the obstacle could
+/// no longer touch the arm ([`REACH_UM`] + r, at most [`FOLD_MAX_UM`]); past a corner,
+/// [`FOLD_CORNER_UM`] along both axes. A disk centred half-way along the fold, its radius
+/// grown by half the fold's length and [`FOLD_SIDE_UM`], covers the fold grown by the
+/// radius and the side (triangle inequality). With no fold, the disk as read.
+#[inline(never)]
+pub fn folded(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
+    // Direction along x and y, and whether folded at all / past a corner, from a table: the
+    // masks this was written with first compiled to selects whose flags a register copy
+    // clobbered (docs/toolchain.md, class 1).
+    let [dx, dy, any, corner] = FOLD_DIRS[((bits & FOLD_MASK) >> 1) as usize];
+    let (dx, dy, any, corner) = (dx as i32, dy as i32, any as i32, corner as i32);
+    // Along the one folded axis: from the reading out to the reach, within the limits.
+    let at = x_um.abs() * (dx * dx) + y_um.abs() * (1 - dx * dx);
+    let f = REACH_UM + r_um - at;
+    let f = f & !(f >> 31);
+    let over = (FOLD_MAX_UM - f) >> 31;
+    let f = f ^ ((f ^ FOLD_MAX_UM) & over);
+    let half = (f >> 1) * (1 - corner) + (FOLD_CORNER_UM / 2) * corner;
+    // Half the fold's length: `half`, or half x sqrt 2 past a corner (425 / 1024 above
+    // sqrt 2 - 1).
+    let half_len = half + ((half * 425) >> 10) * corner;
+    Disk {
+        x_um: x_um + dx * half,
+        y_um: y_um + dy * half,
+        r_um: r_um + (half_len + FOLD_SIDE_UM + 1) * any,
+    }
+}
+
+/// Per fold (the [`FOLD_MASK`] bits shifted down): the direction along x and y (-1, 0,
+/// +1), 1 if folded at all, 1 if past a corner. Opposite sides together cannot happen; they
+/// fold along neither.
+const FOLD_DIRS: [[i8; 4]; 16] = {
+    let mut t = [[0i8; 4]; 16];
+    let mut k = 0;
+    while k < 16 {
+        let dx = (k & 1) as i8 - ((k >> 1) & 1) as i8;
+        let dy = ((k >> 2) & 1) as i8 - ((k >> 3) & 1) as i8;
+        t[k] = [
+            dx,
+            dy,
+            (dx != 0 || dy != 0) as i8,
+            (dx != 0 && dy != 0) as i8,
+        ];
+        k += 1;
+    }
+    t
+};
+
+/// The calibrated square (x min, x max, y min, y max, micrometres) from the sensing
+/// calibration table's header in global RAM: what [`fold_of`] measures a reading against.
+#[inline(never)]
+pub fn calibrated_area(g: &mut (impl GlobalBus + ?Sized)) -> [i32; 4] {
+    let at = |k: u32| vme_map::layout::SENSING_CAL + 4 * (vme_map::records::cal::W_AREA + k);
+    [
+        g.read_u32(at(0)) as i32,
+        g.read_u32(at(1)) as i32,
+        g.read_u32(at(2)) as i32,
+        g.read_u32(at(3)) as i32,
+    ]
+}
 
 /// The disks that cover an obstacle of radius `r_um` swept from (`x`, `y`) by
 /// (`dx_mm`, `dy_mm`): by IV.1, a disk of radius r + d/2 centred on a piece of the path of
@@ -425,13 +522,14 @@ fn next_entry<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
     }
 }
 
-/// Whether entry `e` must be redrawn for beacon sample `b`: nothing
-/// drawn yet, or a new sample that moved the obstacle (its sweep is then redrawn too). The sample the
+/// Whether entry `e` must be redrawn for beacon sample `b` with fold `fold` ([`fold_of`]):
+/// nothing drawn yet, a new fold, or a new sample that moved the obstacle (its sweep is
+/// then redrawn too). The sample the
 /// image was drawn from again changes nothing (passes run much faster than the sensing
 /// board's frames, and must not undo the sweep). Written with bitwise ors of compares: the
 /// short-circuit form compiled to a condition-code clobber on the 68k (docs/toolchain.md).
 #[inline(never)]
-fn needs_redraw(e: &WorkEntry, b: &Beacon) -> bool {
+fn needs_redraw(e: &WorkEntry, b: &Beacon, fold: u32) -> bool {
     let fresh = (b.t_us != e.generation) as u32;
     // A changed sweep counts only with a move beyond MOVE_UM: from the sensing board's
     // resting noise (0.3-0.7 mm) over one 2 ms frame the velocity estimate alone would
@@ -440,7 +538,18 @@ fn needs_redraw(e: &WorkEntry, b: &Beacon) -> bool {
     let moved =
         ((b.x_um - e.x_um).abs() > MOVE_UM) as u32 | ((b.y_um - e.y_um).abs() > MOVE_UM) as u32;
     let undrawn = (e.state & DRAWN == 0) as u32;
-    (undrawn | (fresh & moved)) != 0
+    // A fold that changed (the reading crossed a side of the calibrated square) is redrawn
+    // at once: the drawn disk may no longer cover the beacon.
+    let refold = ((e.state & FOLD_MASK) != fold) as u32;
+    (undrawn | (fresh & moved) | refold) != 0
+}
+
+/// `n` when `state` has an image drawn, else 0. Not inlined, a mask not a branch: inlined
+/// into `job`, its branch read flags a register copy had clobbered (docs/toolchain.md,
+/// class 1).
+#[inline(never)]
+fn if_drawn(n: usize, state: u32) -> usize {
+    n & ((state & DRAWN) as usize).wrapping_neg()
 }
 
 /// The work on claimed entry `i` (held in `e`, updated in place) for beacon sample `b`.
@@ -459,7 +568,6 @@ fn job<B: GlobalBus + ?Sized>(
     if b.flags & beacon_flags::VALID == 0 {
         return out;
     }
-    let drawn = e.state & DRAWN != 0;
     let (sx, sy, clamped) = sweep(e, b.x_um, b.y_um, b.t_us);
     // Only an obstacle the sensing board sees moving is swept: a resting one's position
     // noise over a 2 ms frame would otherwise sweep it by millimetres each redraw.
@@ -467,17 +575,19 @@ fn job<B: GlobalBus + ?Sized>(
     let (sx, sy) = (sx & moving, sy & moving);
     let (sx, sy) = smooth(sweep_of(e), (sx, sy));
     out.clamped = clamped;
-    if !needs_redraw(e, b) {
+    // A reading beyond the calibrated square stands for a beacon anywhere along its fold.
+    let fold = fold_of(b.x_um, b.y_um, b.flags, &calibrated_area(g));
+    if !needs_redraw(e, b, fold) {
         return out;
     }
     // New image first, then the old one goes: no void ever opens.
     let r_um = radius(g, i);
-    let new = cover(b.x_um, b.y_um, sx, sy, r_um);
+    let n = folded(b.x_um, b.y_um, r_um, fold);
+    let new = cover(n.x_um, n.y_um, sx, sy, n.r_um);
     let (was_x, was_y) = sweep_of(e);
-    let mut old = cover(e.x_um, e.y_um, was_x, was_y, e.r_um);
-    if !drawn {
-        old.1 = 0;
-    }
+    let o = folded(e.x_um, e.y_um, e.r_um, e.state & FOLD_MASK);
+    let mut old = cover(o.x_um, o.y_um, was_x, was_y, o.r_um);
+    old.1 = if_drawn(old.1, e.state);
     match update(g, &new, &old, sc) {
         Ok((f, err)) => {
             out.flags.merge(f);
@@ -488,7 +598,7 @@ fn job<B: GlobalBus + ?Sized>(
             e.generation = b.t_us;
             e.reserved = ((sx as u32) << 16) | (sy as u32 & 0xFFFF);
             e.beacon = OBSTACLE_BEACONS[i as usize];
-            e.state = (e.state | DRAWN).wrapping_add(1 << JOB_SHIFT);
+            e.state = ((e.state & !FOLD_MASK) | DRAWN | fold).wrapping_add(1 << JOB_SHIFT);
             out.redrawn = true;
         }
         Err(err) => out.error = Some(err),
