@@ -556,6 +556,9 @@ pub struct Tracks {
     n: [u32; OBSTACLES],
     /// Ring index of the next sample (when full, of the oldest).
     head: [u32; OBSTACLES],
+    /// The radius of the last sample: a new one (a reading beyond the calibrated square is
+    /// the disk over its fold, centred elsewhere) starts the track over.
+    r_um: [i32; OBSTACLES],
     /// The reflex's time of the last sampling pass.
     last_us: u32,
 }
@@ -575,6 +578,7 @@ impl Tracks {
             y_um: [[0; TRACK_SAMPLES]; OBSTACLES],
             n: [0; OBSTACLES],
             head: [0; OBSTACLES],
+            r_um: [0; OBSTACLES],
             last_us: 0,
         }
     }
@@ -610,8 +614,11 @@ impl Tracks {
         let dt = o.t_us.wrapping_sub(newest) as i32;
         let valid = -(o.valid as i32);
         let has = (-n) >> 31;
-        // A track read again too late, or with a time that went back, starts over.
-        let stale = has & (masks::lt(TRACK_STALE_US as i32, dt) | (dt >> 31));
+        // A track read again too late, with a time that went back, or with another radius
+        // (the fold of a reading beyond the calibrated square changed) starts over.
+        let dr = o.r_um ^ self.r_um[i];
+        let resized = (dr | dr.wrapping_neg()) >> 31;
+        let stale = has & (masks::lt(TRACK_STALE_US as i32, dt) | (dt >> 31) | resized);
         let early = has & !stale & masks::lt(dt, TRACK_GAP_US as i32);
         let write = valid & !early;
         let kept = masks::pick(valid & !stale, n, 0);
@@ -619,6 +626,7 @@ impl Tracks {
         self.t_us[i][k] = masks::pick(write, o.t_us as i32, self.t_us[i][k] as i32) as u32;
         self.x_um[i][k] = masks::pick(write, o.x_um, self.x_um[i][k]);
         self.y_um[i][k] = masks::pick(write, o.y_um, self.y_um[i][k]);
+        self.r_um[i] = masks::pick(write, o.r_um, self.r_um[i]);
         self.head[i] = (h + (write & 1) as u32) & MASK;
         self.n[i] = masks::min(kept + (write & 1), TRACK_SAMPLES as i32) as u32;
     }
@@ -893,6 +901,17 @@ mod tests {
         obs[0] = seen(250_000, 0, 0);
         tr.update(250_000, &obs);
         let mut out = [ObstacleView::NONE; OBSTACLES];
+        tr.apply(&obs, &mut out);
+        assert_eq!((out[0].vx_um_s, out[0].vy_um_s), (1, 2));
+        // Another radius (a reading beyond the calibrated square, drawn over its fold,
+        // centred elsewhere): the track starts over.
+        let mut tr = Tracks::new();
+        follow(&mut tr, 0, 200, 230_000, -170_000);
+        obs[0] = ObstacleView {
+            r_um: 90_000,
+            ..seen(208_000, 0, 0)
+        };
+        tr.update(208_000, &obs);
         tr.apply(&obs, &mut out);
         assert_eq!((out[0].vx_um_s, out[0].vy_um_s), (1, 2));
         // A jump (a beacon taken for another) is clamped to the prediction's range.
