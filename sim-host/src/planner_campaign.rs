@@ -17,7 +17,11 @@
 //! both ends. It is a lower bound the real arm cannot quite reach (the servo brakes at less
 //! than umax, and the reflex slows it near walls).
 //!
-//! **A scene.** 1-5 disks of radius 15-45 mm (the C-space database holds images up to 51 mm), 0.10-0.50 m from the shoulder; the arm at rest
+//! **A scene.** 1-5 disks of radius 15-45 mm (the C-space database holds images up to 51 mm),
+//! 0.10-0.50 m from the shoulder with their centres inside the camera's calibrated square
+//! (as the reflex campaign's [`crate::campaign::Place::Sensed`]: beyond it the sensing board
+//! flags a reading `EXTRAPOLATED` and the C-space boards draw it over its whole fold, and
+//! until 2026-11-27 47% of these disks stood there); the arm at rest
 //! in free space (at least 10 mm from every disk); the wand held still at a random point of
 //! the sensing board's calibrated square that the tip can reach. Outcomes: the tip within
 //! 1 cm of the wand (reached), the planner's record saying the goal is unreachable
@@ -318,8 +322,13 @@ pub fn scene(seed: u64, index: u64) -> Scene {
         let n = 1 + (u(0.0, 5.0) as usize).min(4);
         let obstacles: Vec<Obstacle> = (0..n)
             .map(|_| {
-                let d = u(0.10, 0.50);
-                let a = u(-PI, PI);
+                let inside = crate::optics::FIELD_HALF_M - crate::campaign::PLACE_MARGIN_M;
+                let (d, a) = loop {
+                    let (d, a) = (u(0.10, 0.50), u(-PI, PI));
+                    if (d * a.cos()).abs() <= inside && (d * a.sin()).abs() <= inside {
+                        break (d, a);
+                    }
+                };
                 Obstacle {
                     start: Disk {
                         x_m: d * a.cos(),
@@ -818,4 +827,29 @@ pub fn run_to_dir(
         picture(seed, r.index, out)?;
     }
     Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every disk's centre is inside the calibrated square, where the sensing board places
+    /// it to a few millimetres (beyond it, the C-space boards draw the reading over its
+    /// fold), and the disks still spread over the square's whole reach.
+    #[test]
+    fn scenes_keep_their_disks_in_the_calibrated_square() {
+        let inside = crate::optics::FIELD_HALF_M - crate::campaign::PLACE_MARGIN_M;
+        let mut far = 0;
+        for i in 0..300 {
+            for o in &scene(5, i).config.obstacles {
+                let d = o.start;
+                assert!(
+                    d.x_m.abs() <= inside && d.y_m.abs() <= inside,
+                    "scene {i}: {d:?}"
+                );
+                far += (d.x_m.hypot(d.y_m) > 0.40) as u32;
+            }
+        }
+        assert!(far > 20, "{far} disks beyond 0.40 m");
+    }
 }

@@ -30,12 +30,13 @@ fn the_planner_image_matches_the_native_board_pass_for_pass() {
     }
 }
 
-/// 700 scenes of the campaign (seed 1; 535 of them solvable) with all five boards: no collision, at least 99% of
-/// the solvable scenes reached, every unsolvable one reported (or its goal pixel's margin
-/// reached), no scene left undecided but the marginal ones.
+/// 750 scenes of the campaign (seed 1; 513 of them solvable, with the disks inside the
+/// camera's calibrated square since 2026-11-27: 700 drew 481) with all five boards: no
+/// collision, at least 99% of the solvable scenes reached, every unsolvable one reported (or
+/// its goal pixel's margin reached), no scene left undecided but the marginal ones.
 #[test]
 fn the_planner_campaign_reaches_the_solvable_goals_and_reports_the_rest() {
-    let (s, results) = planner_campaign::campaign(1, 700, 2, &|| {});
+    let (s, results) = planner_campaign::campaign(1, 750, 2, &|| {});
     assert_eq!(s.scenes_with_collisions, 0, "{:?}", s.collision_scenes);
     assert!(s.solvable >= 500, "{} solvable", s.solvable);
     assert!(
