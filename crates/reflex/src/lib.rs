@@ -615,19 +615,17 @@ impl Reflex {
 
         // The goal.
         let near = self.goal.unwrap_or(sv.theta_urad);
+        let mut planner_stale = false;
         match inp.goal {
             GoalInput::Planner { goal_urad, cycle } => {
                 if self.planner_cycle != Some(cycle) {
                     self.planner_cycle = Some(cycle);
                     self.planner_since_us = self.now_us;
                 }
-                if self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US {
-                    // The arrest point of the planner's last fresh goal.
-                    let age = self.now_us.wrapping_sub(self.planner_since_us);
-                    let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
-                    return self.hold_output(Fault::PlannerStale, at, out);
+                planner_stale = self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US;
+                if !planner_stale {
+                    self.goal = Some(goal_urad);
                 }
-                self.goal = Some(goal_urad);
                 out.flags |= flags::FROM_PLANNER;
             }
             GoalInput::Wand { x_um, y_um } => {
@@ -649,21 +647,27 @@ impl Reflex {
             // The planner's record reads torn: keep its last goal while that is fresh; a
             // record left torn (a planner that died mid-write) goes stale like a frozen one.
             GoalInput::None => {
-                if self.planner_cycle.is_some()
-                    && self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US
-                {
-                    // The arrest point of the planner's last fresh goal.
-                    let age = self.now_us.wrapping_sub(self.planner_since_us);
-                    let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
-                    return self.hold_output(Fault::PlannerStale, at, out);
-                }
+                planner_stale = self.planner_cycle.is_some()
+                    && self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US;
             }
         }
-        // Back from a hold: start from where the arm was held.
-        if self.hold.take().is_some() {
-            self.last = Some(self.hold_at);
-        }
-        let goal = self.goal.unwrap_or(self.last.unwrap_or(sv.arrest_urad));
+        let goal = if planner_stale {
+            // A planner gone quiet stops the arm's advance, not its reflexes: the goal
+            // becomes the arrest point of the planner's last fresh goal, and the window, the
+            // escape and the evasion go on keeping the arm off obstacles that move onto it
+            // (the map, positions and servo state are good). Held outright, an arm stood
+            // still while a circling disk walked into it (`moving_obstacles.toml`, its
+            // planner halted at 2 s).
+            let age = self.now_us.wrapping_sub(self.planner_since_us);
+            let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
+            self.planner_hold(at, out)
+        } else {
+            // Back from a hold: start from where the arm was held.
+            if self.hold.take().is_some() {
+                self.last = Some(self.hold_at);
+            }
+            self.goal.unwrap_or(self.last.unwrap_or(sv.arrest_urad))
+        };
         // Logged only on passes that got this far (a pass that holds needs no log).
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
@@ -688,6 +692,22 @@ impl Reflex {
         out.subgoal_urad = Some(self.hold_at);
         out.flags = flags::HOLD;
         out.goal_urad = self.goal.unwrap_or(self.hold_at);
+    }
+
+    /// The planner gone quiet ([`PLANNER_STALE_US`]): records the fault once, keeps the
+    /// arrest point `arrest_urad` it had then as the goal (returned) and flags the hold; the
+    /// pass goes on through the window, unlike [`Reflex::hold_output`]'s.
+    #[inline(never)]
+    fn planner_hold(&mut self, arrest_urad: [i32; 2], out: &mut Output) -> [i32; 2] {
+        if self.hold != Some(Fault::PlannerStale) {
+            if self.hold.is_none() {
+                self.hold_at = arrest_urad;
+            }
+            self.hold = Some(Fault::PlannerStale);
+            out.new_fault = Some(Fault::PlannerStale);
+        }
+        out.flags |= flags::HOLD;
+        self.hold_at
     }
 
     /// While the inputs are not yet good after power-up: the arrest point of the first pass.

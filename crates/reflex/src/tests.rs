@@ -857,3 +857,48 @@ fn an_image_that_comes_onto_a_resting_arm_is_escaped_though_nothing_is_flagged_m
     );
     assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
 }
+
+#[test]
+fn a_quiet_planner_stops_the_arm_but_not_its_escape_from_an_obstacle_that_comes_on() {
+    // The planner's cycle counter freezes at pass 20: the arm holds at its arrest point (at
+    // rest at 1.0, 1.0), the fault recorded once. At pass 100 a moving obstacle's image
+    // comes over the arm: it escapes (the reflexes stay on with the planner gone), still
+    // flagged holding, and leaves the marked pixels; when the planner comes back, the hold
+    // ends.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    let mut r = Reflex::default();
+    let mut th = [1.0, 1.0];
+    let (mut faults, mut escaped) = (0, false);
+    for k in 1..=200u32 {
+        if k == 100 {
+            m.block(p - 2, p + 6, p - 6, p + 6);
+        }
+        let cycle = if k < 180 { k.min(20) } else { k };
+        let inp = Input {
+            servo: Some(servo_at(th, [0.0; 2], k)),
+            goal: planner([1.0, 1.0], cycle),
+            health: healthy(k),
+            obstacles_moving: true,
+            obstacles: [ObstacleView::NONE; OBSTACLES],
+        };
+        let o = r.step(&inp, &mut m.map());
+        faults += o.new_fault.is_some() as u32;
+        let s = sub(&o);
+        if (80..100).contains(&k) {
+            assert_eq!(o.flags & flags::HOLD, flags::HOLD, "pass {k}");
+            assert_eq!(s, [1.0, 1.0], "pass {k}");
+        }
+        if (100..180).contains(&k) {
+            assert_ne!(o.flags & flags::HOLD, 0, "pass {k}");
+            escaped |= o.flags & flags::ESCAPING != 0;
+        }
+        if k > 185 {
+            assert_eq!(o.flags & flags::HOLD, 0, "pass {k}");
+        }
+        th = s;
+    }
+    assert_eq!(faults, 1);
+    assert!(escaped);
+    assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
+}

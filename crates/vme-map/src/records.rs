@@ -321,7 +321,9 @@ pub mod reflex_flags {
     pub const STALLED: u32 = 1 << 5;
     /// Covered by an obstacle with no free place within reach: holding.
     pub const TRAPPED: u32 = 1 << 6;
-    /// Holding at the arrest point because an input is bad (a fault is recorded).
+    /// Holding at the arrest point because an input is bad (a fault is recorded); with the
+    /// planner gone quiet, that point is the goal and the reflexes stay on (the arm may
+    /// escape or evade with this flag set).
     pub const HOLD: u32 = 1 << 7;
     /// The goal is the planner's.
     pub const FROM_PLANNER: u32 = 1 << 8;
