@@ -425,6 +425,10 @@ pub struct Reflex {
     goal: Option<[i32; 2]>,
     hold: Option<Fault>,
     hold_at: [i32; 2],
+    /// The goal while the planner is quiet ([`Reflex::planner_hold`]): the arrest point of
+    /// its last fresh goal. Apart from `hold_at`: a bad map or servo state meanwhile holds
+    /// where the arm is then (it may have escaped from that point).
+    planner_hold_at: Option<[i32; 2]>,
     last_loops: u32,
     same_loops: u32,
     torn: u32,
@@ -497,6 +501,7 @@ impl Reflex {
             goal: None,
             hold: None,
             hold_at: [0; 2],
+            planner_hold_at: None,
             last_loops: 0,
             same_loops: 0,
             torn: 0,
@@ -529,9 +534,10 @@ impl Reflex {
         }
     }
 
-    /// Whether the arm is held because of a fault (recorded when it began).
+    /// Whether the arm is held because of a fault (recorded when it began), the planner's
+    /// silence included (there the reflexes stay on).
     pub fn holding(&self) -> bool {
-        self.hold.is_some()
+        self.hold.is_some() || self.planner_hold_at.is_some()
     }
 
     /// One pass: reads the inputs and the map, returns the subgoal to publish.
@@ -651,6 +657,10 @@ impl Reflex {
                     && self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US;
             }
         }
+        // Back from a hold: start from where the arm was held.
+        if self.hold.take().is_some() {
+            self.last = Some(self.hold_at);
+        }
         let goal = if planner_stale {
             // A planner gone quiet stops the arm's advance, not its reflexes: the goal
             // becomes the arrest point of the planner's last fresh goal, and the window, the
@@ -662,10 +672,7 @@ impl Reflex {
             let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
             self.planner_hold(at, out)
         } else {
-            // Back from a hold: start from where the arm was held.
-            if self.hold.take().is_some() {
-                self.last = Some(self.hold_at);
-            }
+            self.planner_hold_at = None;
             self.goal.unwrap_or(self.last.unwrap_or(sv.arrest_urad))
         };
         // Logged only on passes that got this far (a pass that holds needs no log).
@@ -695,19 +702,21 @@ impl Reflex {
     }
 
     /// The planner gone quiet ([`PLANNER_STALE_US`]): records the fault once, keeps the
-    /// arrest point `arrest_urad` it had then as the goal (returned) and flags the hold; the
-    /// pass goes on through the window, unlike [`Reflex::hold_output`]'s.
+    /// arrest point `arrest_urad` it had then as the goal (returned) until the planner is
+    /// back, and flags the hold; the pass goes on through the window, unlike
+    /// [`Reflex::hold_output`]'s.
     #[inline(never)]
     fn planner_hold(&mut self, arrest_urad: [i32; 2], out: &mut Output) -> [i32; 2] {
-        if self.hold != Some(Fault::PlannerStale) {
-            if self.hold.is_none() {
-                self.hold_at = arrest_urad;
+        let at = match self.planner_hold_at {
+            Some(at) => at,
+            None => {
+                out.new_fault = Some(Fault::PlannerStale);
+                arrest_urad
             }
-            self.hold = Some(Fault::PlannerStale);
-            out.new_fault = Some(Fault::PlannerStale);
-        }
+        };
+        self.planner_hold_at = Some(at);
         out.flags |= flags::HOLD;
-        self.hold_at
+        at
     }
 
     /// While the inputs are not yet good after power-up: the arrest point of the first pass.

@@ -863,22 +863,27 @@ fn a_quiet_planner_stops_the_arm_but_not_its_escape_from_an_obstacle_that_comes_
     // The planner's cycle counter freezes at pass 20: the arm holds at its arrest point (at
     // rest at 1.0, 1.0), the fault recorded once. At pass 100 a moving obstacle's image
     // comes over the arm: it escapes (the reflexes stay on with the planner gone), still
-    // flagged holding, and leaves the marked pixels; when the planner comes back, the hold
-    // ends.
+    // flagged holding, and leaves the marked pixels. The map's heartbeat then stops for
+    // 50 passes: that hold is where the arm was, not back at the planner's point inside
+    // the obstacle. When the planner comes back, the holds end.
     let mut m = TestMap::new();
     let p = (1.0 / PIX).floor() as i32;
     let mut r = Reflex::default();
     let mut th = [1.0, 1.0];
-    let (mut faults, mut escaped) = (0, false);
-    for k in 1..=200u32 {
+    let (mut faults, mut escaped, mut map_held) = (0, false, 0);
+    for k in 1..=300u32 {
         if k == 100 {
             m.block(p - 2, p + 6, p - 6, p + 6);
         }
-        let cycle = if k < 180 { k.min(20) } else { k };
+        let cycle = if k < 260 { k.min(20) } else { k };
+        let mut health = healthy(k);
+        if (170..220).contains(&k) {
+            health.cspace_heartbeats[0] = 170;
+        }
         let inp = Input {
             servo: Some(servo_at(th, [0.0; 2], k)),
             goal: planner([1.0, 1.0], cycle),
-            health: healthy(k),
+            health,
             obstacles_moving: true,
             obstacles: [ObstacleView::NONE; OBSTACLES],
         };
@@ -888,17 +893,25 @@ fn a_quiet_planner_stops_the_arm_but_not_its_escape_from_an_obstacle_that_comes_
         if (80..100).contains(&k) {
             assert_eq!(o.flags & flags::HOLD, flags::HOLD, "pass {k}");
             assert_eq!(s, [1.0, 1.0], "pass {k}");
+            assert!(r.holding());
         }
-        if (100..180).contains(&k) {
+        if (100..260).contains(&k) {
             assert_ne!(o.flags & flags::HOLD, 0, "pass {k}");
             escaped |= o.flags & flags::ESCAPING != 0;
         }
-        if k > 185 {
+        if (170..220).contains(&k) && o.flags == flags::HOLD {
+            map_held += 1;
+            assert!(!m.occupied(s[0], s[1]), "pass {k}: held inside at {s:?}");
+        }
+        if k > 265 {
             assert_eq!(o.flags & flags::HOLD, 0, "pass {k}");
+            assert!(!r.holding());
         }
         th = s;
     }
-    assert_eq!(faults, 1);
+    // The planner's silence, then the map's.
+    assert_eq!(faults, 2);
     assert!(escaped);
+    assert!(map_held > 10, "{map_held} passes held for the map");
     assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
 }
