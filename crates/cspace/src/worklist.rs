@@ -94,6 +94,11 @@ pub fn fold_of(x_um: i32, y_um: i32, flags: u32, area_um: &[i32; 4]) -> u32 {
 /// radius and the side (triangle inequality). With no fold, the disk as read.
 #[inline(never)]
 pub fn folded(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
+    // Most readings are inside the square: the disk as read, without the products below
+    // (the reflex asks for every obstacle on every pass among moving ones).
+    if bits & FOLD_MASK == 0 {
+        return Disk { x_um, y_um, r_um };
+    }
     // Direction along x and y, and whether folded at all / past a corner, from a table: the
     // masks this was written with first compiled to selects whose flags a register copy
     // clobbered (docs/toolchain.md, class 1).

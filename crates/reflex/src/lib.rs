@@ -428,7 +428,9 @@ pub struct Reflex {
     /// The goal while the planner is quiet ([`Reflex::planner_hold`]): the arrest point of
     /// its last fresh goal. Apart from `hold_at`: a bad map or servo state meanwhile holds
     /// where the arm is then (it may have escaped from that point).
-    planner_hold_at: Option<[i32; 2]>,
+    planner_hold_at: [i32; 2],
+    /// The planner is quiet: `planner_hold_at` is the goal.
+    planner_holding: bool,
     last_loops: u32,
     same_loops: u32,
     torn: u32,
@@ -501,7 +503,8 @@ impl Reflex {
             goal: None,
             hold: None,
             hold_at: [0; 2],
-            planner_hold_at: None,
+            planner_hold_at: [0; 2],
+            planner_holding: false,
             last_loops: 0,
             same_loops: 0,
             torn: 0,
@@ -537,7 +540,7 @@ impl Reflex {
     /// Whether the arm is held because of a fault (recorded when it began), the planner's
     /// silence included (there the reflexes stay on).
     pub fn holding(&self) -> bool {
-        self.hold.is_some() || self.planner_hold_at.is_some()
+        self.hold.is_some() || self.planner_holding
     }
 
     /// One pass: reads the inputs and the map, returns the subgoal to publish.
@@ -657,10 +660,6 @@ impl Reflex {
                     && self.now_us.wrapping_sub(self.planner_since_us) > PLANNER_STALE_US;
             }
         }
-        // Back from a hold: start from where the arm was held.
-        if self.hold.take().is_some() {
-            self.last = Some(self.hold_at);
-        }
         let goal = if planner_stale {
             // A planner gone quiet stops the arm's advance, not its reflexes: the goal
             // becomes the arrest point of the planner's last fresh goal, and the window, the
@@ -672,7 +671,11 @@ impl Reflex {
             let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
             self.planner_hold(at, out)
         } else {
-            self.planner_hold_at = None;
+            // Back from a hold: start from where the arm was held.
+            if self.hold.take().is_some() {
+                self.last = Some(self.hold_at);
+            }
+            self.planner_holding = false;
             self.goal.unwrap_or(self.last.unwrap_or(sv.arrest_urad))
         };
         // Logged only on passes that got this far (a pass that holds needs no log).
@@ -707,16 +710,18 @@ impl Reflex {
     /// [`Reflex::hold_output`]'s.
     #[inline(never)]
     fn planner_hold(&mut self, arrest_urad: [i32; 2], out: &mut Output) -> [i32; 2] {
-        let at = match self.planner_hold_at {
-            Some(at) => at,
-            None => {
-                out.new_fault = Some(Fault::PlannerStale);
-                arrest_urad
-            }
-        };
-        self.planner_hold_at = Some(at);
+        // Back from a hold (a bad map or servo state meanwhile): on from where the arm was
+        // held.
+        if self.hold.take().is_some() {
+            self.last = Some(self.hold_at);
+        }
+        if !self.planner_holding {
+            out.new_fault = Some(Fault::PlannerStale);
+            self.planner_hold_at = arrest_urad;
+            self.planner_holding = true;
+        }
         out.flags |= flags::HOLD;
-        at
+        self.planner_hold_at
     }
 
     /// While the inputs are not yet good after power-up: the arrest point of the first pass.
