@@ -667,9 +667,7 @@ impl Reflex {
             // (the map, positions and servo state are good). Held outright, an arm stood
             // still while a circling disk walked into it (`moving_obstacles.toml`, its
             // planner halted at 2 s).
-            let age = self.now_us.wrapping_sub(self.planner_since_us);
-            let at = self.log.at_age(self.now_us, age, sv.arrest_urad);
-            self.planner_hold(at, out)
+            self.planner_hold(sv.arrest_urad, out)
         } else {
             // Back from a hold: start from where the arm was held.
             if self.hold.take().is_some() {
@@ -705,9 +703,11 @@ impl Reflex {
     }
 
     /// The planner gone quiet ([`PLANNER_STALE_US`]): records the fault once, keeps the
-    /// arrest point `arrest_urad` it had then as the goal (returned) until the planner is
-    /// back, and flags the hold; the pass goes on through the window, unlike
-    /// [`Reflex::hold_output`]'s.
+    /// arrest point the arm had when the planner's last fresh goal came (from the log: its
+    /// oldest if it does not reach back, the arm's now, `arrest_urad`, if empty) as the goal
+    /// (returned)
+    /// until the planner is back, and flags the hold; the pass goes on through the window,
+    /// unlike [`Reflex::hold_output`]'s. The log is searched on the first such pass only.
     #[inline(never)]
     fn planner_hold(&mut self, arrest_urad: [i32; 2], out: &mut Output) -> [i32; 2] {
         // Back from a hold (a bad map or servo state meanwhile): on from where the arm was
@@ -717,7 +717,8 @@ impl Reflex {
         }
         if !self.planner_holding {
             out.new_fault = Some(Fault::PlannerStale);
-            self.planner_hold_at = arrest_urad;
+            let age = self.now_us.wrapping_sub(self.planner_since_us);
+            self.planner_hold_at = self.log.at_age(self.now_us, age, arrest_urad);
             self.planner_holding = true;
         }
         out.flags |= flags::HOLD;
