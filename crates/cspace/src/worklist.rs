@@ -345,7 +345,13 @@ pub fn move_disk<B: GlobalBus + ?Sized>(
     new: &Disk,
     sc: &mut Scratch,
 ) -> Result<(Flags, Option<Error>), Error> {
-    update(g, &([*new; MAX_COVER], 1), &([*old; MAX_COVER], 1), sc)
+    update(
+        g,
+        &([*new; MAX_COVER], 1),
+        &([*old; MAX_COVER], 1),
+        sc,
+        Progress::new(0, 0),
+    )
 }
 
 /// Moves an obstacle's images from the cover disks `old` to `new` (thesis lines 1199-1210:
@@ -362,6 +368,7 @@ fn update<B: GlobalBus + ?Sized>(
     new: &([Disk; MAX_COVER], usize),
     old: &([Disk; MAX_COVER], usize),
     sc: &mut Scratch,
+    mut progress: Progress,
 ) -> Result<(Flags, Option<Error>), Error> {
     // Every cover disk of a position has the same radius: one check covers them all.
     crate::family(new.0[0].r_um)?;
@@ -398,9 +405,11 @@ fn update<B: GlobalBus + ?Sized>(
         );
         f.merge(fl);
         sc.logged[2 * i + 1] = ok;
+        progress.mark(canvas.0);
     }
     // Second half: the old images go.
     f.merge(sc.log.erase(&mut canvas));
+    progress.mark(canvas.0);
     for i in 0..pairs {
         if let Some(s) = &sc.old_stripes[i] {
             f.merge(raster::stripe(s, &mut canvas, Op::Erase));
@@ -431,8 +440,38 @@ fn update<B: GlobalBus + ?Sized>(
             );
             f.merge(fl);
         }
+        progress.mark(canvas.0);
     }
     Ok((f, old_err))
+}
+
+/// A job's progress marks in its claimed entry's `claim` word (`WorkEntry::claim`): the
+/// board's number in bits 0-7, a count in bits 8-31 advanced after each pair of link-2
+/// images and after the erase. A job can outlast the reflex's limit for an entry claimed
+/// and unchanged (`reflex::health::MAP_TORN_US`, 20 ms; the bench's worst job is 46 ms):
+/// the marks tell it a board is at work there, as a board that died mid-job leaves them
+/// still.
+struct Progress {
+    claim: u32,
+    me: u32,
+    n: u32,
+}
+
+impl Progress {
+    /// Marks in the `claim` word at `claim` for board number `me` (1-3); `me` 0 marks
+    /// nothing (a move with no work-list entry, [`move_disk`]).
+    fn new(claim: u32, me: u32) -> Self {
+        Self { claim, me, n: 0 }
+    }
+
+    /// One more mark.
+    #[inline(never)]
+    fn mark<B: GlobalBus + ?Sized>(&mut self, g: &mut B) {
+        self.n = self.n.wrapping_add(1) & 0x00FF_FFFF;
+        if self.me != 0 {
+            g.write_u32(self.claim, self.me | (self.n << 8));
+        }
+    }
 }
 
 /// What one pass of [`step`] did.
@@ -503,7 +542,7 @@ pub fn step_words<B: GlobalBus + ?Sized>(
     }
     let mut e = entry(g, i);
     let b = beacon_of(objects, i);
-    let out = job(g, i, &b, &mut e, sc);
+    let out = job(g, i, &b, &mut e, sc, me);
     // Write the entry back with the claim still ours, then release it last.
     e.encode(&mut |w, v| {
         if w != 0 {
@@ -565,6 +604,7 @@ fn job<B: GlobalBus + ?Sized>(
     b: &Beacon,
     e: &mut WorkEntry,
     sc: &mut Scratch,
+    me: u32,
 ) -> Outcome {
     let mut out = Outcome {
         entry: i,
@@ -593,7 +633,7 @@ fn job<B: GlobalBus + ?Sized>(
     let o = folded(e.x_um, e.y_um, e.r_um, e.state & FOLD_MASK);
     let mut old = cover(o.x_um, o.y_um, was_x, was_y, o.r_um);
     old.1 = if_drawn(old.1, e.state);
-    match update(g, &new, &old, sc) {
+    match update(g, &new, &old, sc, Progress::new(work_entry(i), me)) {
         Ok((f, err)) => {
             out.flags.merge(f);
             out.error = err;

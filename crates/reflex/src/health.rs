@@ -7,10 +7,12 @@
 
 use crate::masks::{lt, pick};
 
-/// A C-space map no board has worked on for this long is stale.
+/// A C-space map no board has worked on for this long is stale (no heartbeat moved and
+/// no claimed work-list entry changed).
 pub const MAP_STALE_US: u32 = 30_000;
 /// A work-list entry claimed, unchanged, for this long was abandoned mid-update: the map is
-/// torn (an image half drawn).
+/// torn (an image half drawn). A board at work marks its progress in the claim word
+/// (`cspace::worklist`), so a long job is not taken for an abandoned one.
 pub const MAP_TORN_US: u32 = 20_000;
 /// An obstacle whose drawn image lies this far from its sensed position ...
 pub const LAG_UM: i32 = 15_000;
@@ -104,6 +106,9 @@ pub struct Monitor {
     verdict: [u32; 3],
     /// Bit `i`: entry `i` has been read at least once.
     seen: u32,
+    /// -1 when an entry read this pass was claimed and had changed since its last reading:
+    /// a C-space board at work on a long job (its progress marks, `WorkEntry::claim`).
+    working: i32,
 }
 
 impl Monitor {
@@ -132,6 +137,7 @@ impl Monitor {
             behind_now: 0,
             verdict: [0; 3],
             seen: 0,
+            working: 0,
         }
     }
 
@@ -176,6 +182,11 @@ impl Monitor {
             }
             i += 1;
         }
+        // A board at work on a long job beats no heartbeat until it ends (the bench's worst
+        // job is 46 ms, over MAP_STALE_US), but its progress marks move its entry's claim
+        // word: that is a board keeping the map too.
+        self.hb_since_us = since(self.working, self.hb_since_us);
+        self.working = 0;
         let [torn, lag, behind_now] = self.verdict;
         let (torn, lag) = (nonzero(torn), nonzero(lag));
         self.behind_now = nonzero(behind_now);
@@ -210,6 +221,7 @@ impl Monitor {
         let free = nonzero(e.claim) ^ -1;
         let changed = nonzero((e.claim ^ old.claim) | (e.state ^ old.state));
         self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
+        self.working |= changed & !free;
         let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
         self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
         let bit = 1u32 << i;

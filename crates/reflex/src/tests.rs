@@ -915,3 +915,44 @@ fn a_quiet_planner_stops_the_arm_but_not_its_escape_from_an_obstacle_that_comes_
     assert!(map_held > 10, "{map_held} passes held for the map");
     assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
 }
+
+#[test]
+fn a_long_cspace_job_that_marks_its_progress_is_neither_torn_nor_stale() {
+    // From pass 11 to 110 (100 ms, over both the 20 ms torn and the 30 ms stale limits) no
+    // C-space heartbeat moves and entry 2 stays claimed by board 1. With its claim word's
+    // count advancing every 8 ms (the job's marks) the arm carries on; with the word
+    // frozen the reflex holds for a torn map, as an abandoned job.
+    let m = TestMap::new();
+    for marks in [true, false] {
+        let mut r = Reflex::default();
+        let mut fault = None;
+        for k in 1..=110u32 {
+            let mut h = healthy(k);
+            if k > 10 {
+                h.cspace_heartbeats[0] = 10;
+                let n = if marks { k / 8 } else { 1 };
+                h.entries[2] = EntryView {
+                    claim: 1 | (n << 8),
+                    state: 7,
+                    ..Default::default()
+                };
+            }
+            let o = r.step(
+                &Input {
+                    servo: Some(servo_at([0.0, 0.0], [0.0, 0.0], k)),
+                    goal: planner([1.0, 1.0], k),
+                    health: h,
+                    obstacles_moving: false,
+                    obstacles: [ObstacleView::NONE; OBSTACLES],
+                },
+                &mut m.map(),
+            );
+            fault = fault.or(o.new_fault);
+        }
+        if marks {
+            assert_eq!(fault, None);
+        } else {
+            assert_eq!(fault, Some(Fault::Input(health::Problem::MapTorn)));
+        }
+    }
+}

@@ -432,11 +432,13 @@ pub const WORK_ENTRIES: usize = 16;
 
 record! {
     /// One transform job of the C-space work list (thesis line 1225: a circular list and a
-    /// semaphore shared by several C-space boards). The `claim` word is only ever changed
-    /// with [`crate::GlobalBus::cas_u32`]; the rest of the entry has exactly one writer, the
-    /// board whose claim succeeded.
+    /// semaphore shared by several C-space boards). The `claim` word is taken only with
+    /// [`crate::GlobalBus::cas_u32`] (from 0); while it is held, the entry, `claim`
+    /// included, has exactly one writer, the board whose claim succeeded.
     pub struct WorkEntry {
-        /// 0 = free, otherwise 1 + index of the claiming board.
+        /// 0 = free, otherwise 1 + index of the claiming board in bits 0-7 and, in bits
+        /// 8-31, a count the board advances as its job goes on (so a long job is told from
+        /// an abandoned one).
         pub claim: u32,
         /// Beacon whose obstacle this job transforms.
         pub beacon: u32,
