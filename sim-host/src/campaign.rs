@@ -93,6 +93,14 @@ impl Place {
 /// `EXTRAPOLATED` (5 mm outside).
 pub const PLACE_MARGIN_M: f64 = 0.010;
 
+/// Whether a disk centre `d_m` from the shoulder at bearing `a_rad` is at least
+/// [`PLACE_MARGIN_M`] inside the camera's calibrated square: where [`Place::Sensed`] (and
+/// the planner campaign) put their disks.
+pub fn in_view(d_m: f64, a_rad: f64) -> bool {
+    let inside = crate::optics::FIELD_HALF_M - PLACE_MARGIN_M;
+    (d_m * a_rad.cos()).abs() <= inside && (d_m * a_rad.sin()).abs() <= inside
+}
+
 /// Nearest a campaign disk's centre comes to the shoulder, m.
 pub const PLACE_MIN_M: f64 = 0.12;
 
@@ -140,7 +148,7 @@ fn scene_drawn(kind: Kind, place: Place, seed: u64, index: u64, survivable: bool
                 (Place::Sensed, Kind::Moving) => (u(PLACE_MIN_M, inside), u(-PI, PI)),
                 (Place::Sensed, Kind::Static) => loop {
                     let (d, a) = (u(PLACE_MIN_M, PLACE_MAX_M), u(-PI, PI));
-                    if (d * a.cos()).abs() <= inside && (d * a.sin()).abs() <= inside {
+                    if in_view(d, a) {
                         break (d, a);
                     }
                 },

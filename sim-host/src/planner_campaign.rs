@@ -322,10 +322,9 @@ pub fn scene(seed: u64, index: u64) -> Scene {
         let n = 1 + (u(0.0, 5.0) as usize).min(4);
         let obstacles: Vec<Obstacle> = (0..n)
             .map(|_| {
-                let inside = crate::optics::FIELD_HALF_M - crate::campaign::PLACE_MARGIN_M;
                 let (d, a) = loop {
                     let (d, a) = (u(0.10, 0.50), u(-PI, PI));
-                    if (d * a.cos()).abs() <= inside && (d * a.sin()).abs() <= inside {
+                    if crate::campaign::in_view(d, a) {
                         break (d, a);
                     }
                 };
