@@ -106,9 +106,6 @@ pub struct Monitor {
     verdict: [u32; 3],
     /// Bit `i`: entry `i` has been read at least once.
     seen: u32,
-    /// -1 when an entry read this pass was claimed and had changed since its last reading:
-    /// a C-space board at work on a long job (its progress marks, `WorkEntry::claim`).
-    working: i32,
 }
 
 impl Monitor {
@@ -137,7 +134,6 @@ impl Monitor {
             behind_now: 0,
             verdict: [0; 3],
             seen: 0,
-            working: 0,
         }
     }
 
@@ -175,18 +171,18 @@ impl Monitor {
         // Only the entries read this pass are looked at again; the others keep the verdict
         // of their last reading (a few passes old: the limits are 20-100 ms).
         self.seen |= h.fresh & ((1 << ENTRIES) - 1);
+        let mut working = 0;
         let mut i = 0;
         while i < ENTRIES {
             if (h.fresh >> i) & 1 != 0 {
-                self.entry(i, &h.entries[i], now_us);
+                working |= self.entry(i, &h.entries[i], now_us);
             }
             i += 1;
         }
         // A board at work on a long job beats no heartbeat until it ends (the bench's worst
         // job is 46 ms, over MAP_STALE_US), but its progress marks move its entry's claim
         // word: that is a board keeping the map too.
-        self.hb_since_us = since(self.working, self.hb_since_us);
-        self.working = 0;
+        self.hb_since_us = since(working, self.hb_since_us);
         let [torn, lag, behind_now] = self.verdict;
         let (torn, lag) = (nonzero(torn), nonzero(lag));
         self.behind_now = nonzero(behind_now);
@@ -209,9 +205,10 @@ impl Monitor {
 
 impl Monitor {
     /// Takes entry `i`'s new reading `e` at `now_us`: its timers and verdict (torn, lagging,
-    /// behind now: masks).
+    /// behind now: masks). Returns -1 when the entry is claimed and changed since its last
+    /// reading (a C-space board at work on it: its progress marks, `WorkEntry::claim`).
     #[inline(never)]
-    fn entry(&mut self, i: usize, e: &EntryView, now_us: u32) {
+    fn entry(&mut self, i: usize, e: &EntryView, now_us: u32) -> i32 {
         let now = now_us as i32;
         let since = |m: i32, since: u32| pick(m, now, since as i32) as u32;
         let older = |since: u32, limit: u32| {
@@ -221,7 +218,6 @@ impl Monitor {
         let free = nonzero(e.claim) ^ -1;
         let changed = nonzero((e.claim ^ old.claim) | (e.state ^ old.state));
         self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
-        self.working |= changed & !free;
         let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
         self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
         let bit = 1u32 << i;
@@ -233,6 +229,7 @@ impl Monitor {
         self.verdict[1] = put(self.verdict[1], older(self.lag_since_us[i], LAG_US));
         self.verdict[2] = put(self.verdict[2], behind);
         self.entries[i] = *e;
+        changed & !free
     }
 }
 
