@@ -129,15 +129,19 @@ impl Board {
         // is false and nothing but the lag of entries that are not tracked looks at it.
         self.objects_ok = vme_map::OBJECTS.read_raw(g, &mut self.objects_w).is_ok();
         let ok = self.objects_ok;
-        let goal = match vme_map::PLANNER_GOAL.read_raw(g, &mut self.planner_w) {
-            Ok(0) => wand(&self.objects_w, ok),
-            Ok(_) => GoalInput::Planner {
-                goal_urad: [self.planner_w[0] as i32, self.planner_w[1] as i32],
-                cycle: self.planner_w[4],
-            },
+        // Each arm writes the input's goal itself (a value built first and assigned was a
+        // `memcpy` call a pass).
+        match vme_map::PLANNER_GOAL.read_raw(g, &mut self.planner_w) {
+            Ok(0) => wand(&mut self.input.goal, &self.objects_w, ok),
+            Ok(_) => {
+                self.input.goal = GoalInput::Planner {
+                    goal_urad: [self.planner_w[0] as i32, self.planner_w[1] as i32],
+                    cycle: self.planner_w[4],
+                }
+            }
             // The planner published once and now reads torn: keep the last goal.
-            Err(_) => GoalInput::None,
-        };
+            Err(_) => self.input.goal = GoalInput::None,
+        }
         // The inputs are built in place in the board (copying them into a fresh value each
         // pass cost the 68020 thousands of cycles of memset and memcpy).
         let inp = &mut self.input;
@@ -147,7 +151,6 @@ impl Board {
         } else {
             inp.servo = None;
         }
-        inp.goal = goal;
         inp.health.objects_frame = self.objects_w[0];
         inp.health.objects_torn = !ok;
         // One work-list entry a pass, in turn (the health limits are 20-100 ms).
@@ -224,18 +227,18 @@ fn publish<G: GlobalBus>(
     vme_map::REFLEX_STATUS.publish_raw(g, status);
 }
 
-/// The wand's position as the goal, if the table is whole and the wand valid.
+/// The wand's position as the goal into `goal`, if the table is whole and the wand valid.
 #[inline(never)]
-fn wand(t: &[u32; OBJECT_WORDS], ok: bool) -> GoalInput {
+fn wand(goal: &mut GoalInput, t: &[u32; OBJECT_WORDS], ok: bool) {
     let w = beacon_index::WAND;
-    if beacon_valid(t, w, ok) {
+    *goal = if beacon_valid(t, w, ok) {
         GoalInput::Wand {
             x_um: beacon_word(t, w, 0) as i32,
             y_um: beacon_word(t, w, 1) as i32,
         }
     } else {
         GoalInput::None
-    }
+    };
 }
 
 /// Whether the sensing board flags any valid obstacle beacon as moving.

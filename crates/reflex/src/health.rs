@@ -91,7 +91,10 @@ pub struct Monitor {
     /// A frame counter has been read (-1).
     frame_had: i32,
     frame_since_us: u32,
-    entries: [EntryView; ENTRIES],
+    /// Each entry's claim and state words at its last reading (only these are compared:
+    /// copying whole views was a `memcpy` call a pass on the 68020).
+    claims: [u32; ENTRIES],
+    states: [u32; ENTRIES],
     claimed_since_us: [u32; ENTRIES],
     lag_since_us: [u32; ENTRIES],
     started: bool,
@@ -125,7 +128,8 @@ impl Monitor {
             frame: 0,
             frame_had: 0,
             frame_since_us: 0,
-            entries: [EntryView::EMPTY; ENTRIES],
+            claims: [0; ENTRIES],
+            states: [0; ENTRIES],
             claimed_since_us: [0; ENTRIES],
             lag_since_us: [0; ENTRIES],
             started: false,
@@ -141,15 +145,7 @@ impl Monitor {
     /// anything, is wrong.
     pub fn observe(&mut self, h: &HealthInput, now_us: u32) -> Option<Problem> {
         if !self.started {
-            self.started = true;
-            self.hb = h.cspace_heartbeats;
-            self.hb_since_us = now_us;
-            self.frame = h.objects_frame;
-            self.frame_had = -(!h.objects_torn as i32);
-            self.frame_since_us = now_us;
-            self.entries = h.entries;
-            self.claimed_since_us = [now_us; ENTRIES];
-            self.lag_since_us = [now_us; ENTRIES];
+            self.start(h, now_us);
         }
         // Decisions as masks (-1 = yes), not booleans (docs/toolchain.md).
         let now = now_us as i32;
@@ -160,7 +156,6 @@ impl Monitor {
         let (a, b) = (h.cspace_heartbeats, self.hb);
         let beat = nonzero((a[0] ^ b[0]) | (a[1] ^ b[1]) | (a[2] ^ b[2]));
         self.hb = a;
-        self.hb_since_us = since(beat, self.hb_since_us);
         self.hb_seen |= beat;
         let ok = -(!h.objects_torn as i32);
         let new = nonzero(h.objects_frame ^ self.frame) & ok;
@@ -173,16 +168,19 @@ impl Monitor {
         self.seen |= h.fresh & ((1 << ENTRIES) - 1);
         let mut working = 0;
         let mut i = 0;
-        while i < ENTRIES {
-            if (h.fresh >> i) & 1 != 0 {
+        // Up to the last entry read (the board reads one a pass).
+        let mut fresh = h.fresh & ((1 << ENTRIES) - 1);
+        while fresh != 0 {
+            if fresh & 1 != 0 {
                 working |= self.entry(i, &h.entries[i], now_us);
             }
+            fresh >>= 1;
             i += 1;
         }
         // A board at work on a long job beats no heartbeat until it ends (the bench's worst
         // job is 46 ms, over MAP_STALE_US), but its progress marks move its entry's claim
         // word: that is a board keeping the map too.
-        self.hb_since_us = since(working, self.hb_since_us);
+        self.hb_since_us = since(beat | working, self.hb_since_us);
         let [torn, lag, behind_now] = self.verdict;
         let (torn, lag) = (nonzero(torn), nonzero(lag));
         self.behind_now = nonzero(behind_now);
@@ -204,6 +202,27 @@ impl Monitor {
 }
 
 impl Monitor {
+    /// The first reading: every timer starts at `now_us` (out of line: the pass's code
+    /// stays short).
+    #[cold]
+    #[inline(never)]
+    fn start(&mut self, h: &HealthInput, now_us: u32) {
+        self.started = true;
+        self.hb = h.cspace_heartbeats;
+        self.hb_since_us = now_us;
+        self.frame = h.objects_frame;
+        self.frame_had = -(!h.objects_torn as i32);
+        self.frame_since_us = now_us;
+        let mut i = 0;
+        while i < ENTRIES {
+            self.claims[i] = h.entries[i].claim;
+            self.states[i] = h.entries[i].state;
+            i += 1;
+        }
+        self.claimed_since_us = [now_us; ENTRIES];
+        self.lag_since_us = [now_us; ENTRIES];
+    }
+
     /// Takes entry `i`'s new reading `e` at `now_us`: its timers and verdict (torn, lagging,
     /// behind now: masks). Returns -1 when the entry is claimed and changed since its last
     /// reading (a C-space board at work on it: its progress marks, `WorkEntry::claim`).
@@ -214,9 +233,8 @@ impl Monitor {
         let older = |since: u32, limit: u32| {
             lt(limit as i32, now_us.wrapping_sub(since).min(1 << 30) as i32)
         };
-        let old = self.entries[i];
         let free = nonzero(e.claim) ^ -1;
-        let changed = nonzero((e.claim ^ old.claim) | (e.state ^ old.state));
+        let changed = nonzero((e.claim ^ self.claims[i]) | (e.state ^ self.states[i]));
         self.claimed_since_us[i] = since(free | changed, self.claimed_since_us[i]);
         let behind = -(e.undrawn as i32) | (-(e.tracked as i32) & lt(LAG_UM, e.lag_um));
         self.lag_since_us[i] = since(!behind, self.lag_since_us[i]);
@@ -228,7 +246,8 @@ impl Monitor {
         );
         self.verdict[1] = put(self.verdict[1], older(self.lag_since_us[i], LAG_US));
         self.verdict[2] = put(self.verdict[2], behind);
-        self.entries[i] = *e;
+        self.claims[i] = e.claim;
+        self.states[i] = e.state;
         changed & !free
     }
 }
