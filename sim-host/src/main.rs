@@ -112,6 +112,10 @@ enum Cmd {
         /// `sensing`: the seed of the sensor model and the survey.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// `reflex`: after each case, its this many costliest functions (cycles a pass in
+        /// their own code, every instruction charged; 0: no profile).
+        #[arg(long, default_value_t = 0)]
+        top: usize,
     },
     /// Campaigns: `reflex` runs random scenes (1-5 disks, random start in free space
     /// and wand goal) with the sensing, C-space, servo and reflex boards and the collision
@@ -428,7 +432,12 @@ fn main() -> ExitCode {
             out,
             quick,
             seed,
+            top,
         } => {
+            if top > 0 && what != "reflex" {
+                eprintln!("sim-host: bench {what}: --top is for the reflex bench");
+                return ExitCode::FAILURE;
+            }
             match what.as_str() {
                 "sim" => {
                     let r = sim_host::bench::sim(seconds, reps);
@@ -448,7 +457,8 @@ fn main() -> ExitCode {
                     }
                 }
                 "reflex" => {
-                    match sim_host::reflex_bench::report(&sim_host::boot::default_images_dir()) {
+                    match sim_host::reflex_bench::report(&sim_host::boot::default_images_dir(), top)
+                    {
                         Ok(r) => {
                             print!("{r}");
                             ExitCode::SUCCESS

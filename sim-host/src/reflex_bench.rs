@@ -12,7 +12,7 @@
 //! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
 //!   (native mode): the reflex must not slow the arm.
 
-use crate::boot::System;
+use crate::boot::{demangle_short, FunctionCycles, System};
 use crate::sim::{Config, Sim};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -35,6 +35,9 @@ pub struct ImageCase {
     /// Mean pixels vouched for per pass without a read (columns whose generation has not
     /// moved since the reflex read them: `reflex::window::Known`).
     pub known_per_pass: f64,
+    /// With a profile asked for: the `top` functions by the cycles spent in their own code
+    /// over the measured passes (short names), costliest first, as cycles per pass.
+    pub top: Vec<(String, f64)>,
 }
 
 impl ImageCase {
@@ -143,7 +146,13 @@ struct Spec {
 /// Runs the reflex image for `ms` with the arm at `c.theta` turning at `c.omega` (held
 /// there: each pass sees the same state, as the case is defined), `c`'s obstacles in the map
 /// and the wand at `wand` (mm).
-fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCase, String> {
+fn image_case(
+    dir: &Path,
+    c: &Spec,
+    wand: (i32, i32),
+    ms: f64,
+    top: usize,
+) -> Result<ImageCase, String> {
     let Spec {
         name,
         theta,
@@ -154,6 +163,13 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
         redraw_ms,
     } = *c;
     let mut sys = System::power_up(dir, &[BoardId::Reflex]).map_err(|e| e.to_string())?;
+    let mut per = if top > 0 {
+        let image =
+            crate::image::Image::load(&dir.join("reflex.elf")).map_err(|e| e.to_string())?;
+        Some(FunctionCycles::new(&image))
+    } else {
+        None
+    };
     let mut table = ObjectTable::default();
     {
         let mut g = sys.bus();
@@ -234,7 +250,20 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
             redraws += 1;
         }
         feed.apply(&mut sys.bus());
-        sys.run_ms(step_ms);
+        match per.as_mut().filter(|_| timing) {
+            // One instruction at a time, each charged to its function (the same cycles).
+            Some(per) => {
+                let end = sys.now + (step_ms * crate::emu::CPU_HZ as f64 / 1000.0) as u64;
+                let b = &mut sys.boards[0];
+                while b.cycles < end && b.state == crate::emu::RunState::Running {
+                    let pc = b.cpu.pc;
+                    let c = b.step(&mut sys.global);
+                    per.charge(pc, c);
+                }
+                sys.now = end;
+            }
+            None => sys.run_ms(step_ms),
+        }
         // Measure after the reflex has had half a second to get going.
         if k as f64 * step_ms >= 500.0 {
             if !timing {
@@ -286,6 +315,13 @@ fn image_case(dir: &Path, c: &Spec, wand: (i32, i32), ms: f64) -> Result<ImageCa
         worst_cycles: beats.max_cycles,
         tests_per_pass: tests_sum / samples.max(1) as f64,
         known_per_pass: known_sum / samples.max(1) as f64,
+        top: per.map_or_else(Vec::new, |per| {
+            per.top()
+                .into_iter()
+                .take(top)
+                .map(|(n, c)| (demangle_short(&n), c as f64 / passes as f64))
+                .collect()
+        }),
     })
 }
 
@@ -297,8 +333,8 @@ const CLUTTER: [(i32, i32, i32); 4] = [
     (-350, -150, 25),
 ];
 
-/// The image cases (module docs).
-pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
+/// The image cases (module docs), each with its `top` costliest functions when `top > 0`.
+pub fn image_cases(dir: &Path, top: usize) -> Result<Vec<ImageCase>, String> {
     // (name, angles, speeds, obstacles)
     // The arm's tip on the first clutter disk's centre (inside its image: the escape
     // crosses marks) and 15 mm off its edge (within a moving obstacle's reach: the escape
@@ -373,6 +409,15 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
             redraw_ms: 0,
         },
         Spec {
+            name: "escaping, inside, one obstacle redrawn every 10 ms",
+            theta: tip_at(cx, cy),
+            omega: still,
+            disks: &CLUTTER,
+            moving: true,
+            advance: false,
+            redraw_ms: 10,
+        },
+        Spec {
             name: "escaping: the arm 15 mm off a moving obstacle, at rest",
             theta: tip_at(cx, cy + cr + 15),
             omega: still,
@@ -384,7 +429,7 @@ pub fn image_cases(dir: &Path) -> Result<Vec<ImageCase>, String> {
     ];
     cases
         .iter()
-        .map(|c| image_case(dir, c, (-300, 200), 900.0))
+        .map(|c| image_case(dir, c, (-300, 200), 900.0, top))
         .collect()
 }
 
@@ -464,7 +509,9 @@ pub fn free_move() -> Result<(f64, f64), String> {
 }
 
 /// The bench's report.
-pub fn report(dir: &Path) -> Result<String, String> {
+/// The bench's report; with `top > 0` each case is followed by its `top` costliest
+/// functions (own code only, cycles per pass).
+pub fn report(dir: &Path, top: usize) -> Result<String, String> {
     let mut r = String::new();
     let _ = writeln!(
         r,
@@ -485,7 +532,7 @@ pub fn report(dir: &Path) -> Result<String, String> {
         "checked/s",
         "read/s"
     );
-    for c in image_cases(dir)? {
+    for c in image_cases(dir, top)? {
         let _ = writeln!(
             r,
             "{:<58} {:>7} {:>8.0} {:>8} {:>7.1} {:>7.1} {:>8.0} {:>8.0} {:>11.0} {:>10.0}",
@@ -500,6 +547,9 @@ pub fn report(dir: &Path) -> Result<String, String> {
             c.pixels_per_s(),
             c.reads_per_s()
         );
+        for (name, cycles) in &c.top {
+            let _ = writeln!(r, "    {cycles:>9.0}  {name}");
+        }
     }
     let _ = writeln!(
         r,

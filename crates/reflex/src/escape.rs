@@ -64,6 +64,18 @@ pub struct Scratch {
     t: [i32; 2],
     /// The step (window pixel).
     step: [i32; 2],
+    /// The generations of the window's columns (`Map::column_gen`) when it was last
+    /// loaded, window column `k` at index `k`.
+    gens: [u32; WIN],
+    /// The last plan's ask and result, kept while neither the ask nor a column of the
+    /// window changes (then the plan is the same: it depends on nothing else).
+    memo_ask: Ask,
+    memo: Option<Plan>,
+    /// `memo_ask` and `memo` hold a plan (-1), on a map with generations.
+    memo_valid: i32,
+    /// Pixels whose words the kept plans stood for without a read, since
+    /// [`Scratch::take_vouched`].
+    vouched: u32,
 }
 
 impl Default for Scratch {
@@ -89,7 +101,24 @@ impl Scratch {
             grew: 0,
             t: [0; 2],
             step: [0; 2],
+            gens: [0; WIN],
+            memo_ask: Ask {
+                at_px: [0; 2],
+                toward_px: [0; 2],
+                clear_px: 0,
+                cross: false,
+                prev_px: None,
+            },
+            memo: None,
+            memo_valid: 0,
+            vouched: 0,
         }
+    }
+
+    /// Pixels a kept plan stood for without reading them (the window's words and stripes,
+    /// every column's generation unchanged) since the last call.
+    pub fn take_vouched(&mut self) -> u32 {
+        core::mem::take(&mut self.vouched)
     }
 }
 
@@ -125,6 +154,50 @@ pub struct Ask {
 /// Adds the pixel words read to `tests`.
 #[inline(never)]
 pub fn plan<M: Map + ?Sized>(
+    m: &mut M,
+    s: &mut Scratch,
+    ask: &Ask,
+    tests: &mut u32,
+) -> Option<Plan> {
+    // The window's column generations are read before its words: a column written after
+    // this read has a newer generation at the next plan, which then loads it again.
+    let same = same_window(m, s, ask);
+    if same != 0 {
+        s.vouched += WORDS;
+        return s.memo;
+    }
+    let p = plan_anew(m, s, ask, tests);
+    s.memo_ask = *ask;
+    s.memo = p;
+    s.memo_valid = -(m.has_gens() as i32);
+    p
+}
+
+/// Whether `ask` is the last plan's and no column of its window has been written since
+/// (-1), reading the window's generations into `s.gens` (on a map without generations:
+/// never, 0).
+#[inline(never)]
+fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
+    if !m.has_gens() {
+        return 0;
+    }
+    let c0 = (ask.at_px[0] - HALF) as u32;
+    let mut moved = 0;
+    let mut k = 0;
+    while k < WIN {
+        let g = m.column_gen((c0 + k as u32) & 127);
+        moved |= g ^ s.gens[k];
+        s.gens[k] = g;
+        k += 1;
+    }
+    let unmoved = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
+    let same_ask = -((*ask == s.memo_ask) as i32);
+    unmoved & same_ask & s.memo_valid
+}
+
+/// [`plan`] from the map's words.
+#[inline(never)]
+fn plan_anew<M: Map + ?Sized>(
     m: &mut M,
     s: &mut Scratch,
     ask: &Ask,
@@ -176,8 +249,11 @@ fn load<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, at: [i32; 2], tests: &mut u
         s.free[0][r] = !(m.row_run(row, c0) | stripes);
         r += 1;
     }
-    *tests += 32 * (WIN as u32 + 1);
+    *tests += WORDS;
 }
+
+/// Words a window's load reads: its rows' pixels and its columns' stripes.
+const WORDS: u32 = 32 * (WIN as u32 + 1);
 
 /// A row's pixels whose left and right neighbours are free too (beyond the window: marked).
 #[inline(always)]

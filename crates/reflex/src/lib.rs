@@ -967,6 +967,8 @@ impl Reflex {
             prev_px: self.escape_to,
         };
         let p = escape::plan(map, &mut self.scratch, &ask, tests);
+        // A plan kept (its window unwritten) stood for the window's pixels.
+        self.known.vouch(self.scratch.take_vouched());
         self.escape_to = p.map(|p| p.target_px);
         p.map(|p| p.step_px)
     }

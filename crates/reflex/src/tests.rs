@@ -746,6 +746,86 @@ proptest! {
     }
 }
 
+/// One step of the kept-escape check: a pixel or stripe written (its column raised), or an
+/// escape planned from near (60, 60).
+#[derive(Clone, Debug)]
+enum EscapeOp {
+    Write {
+        i1: u32,
+        i2: u32,
+        stripe: bool,
+        set: bool,
+    },
+    Plan {
+        at: [i32; 2],
+        toward: [i32; 2],
+        clear: i32,
+        cross: bool,
+    },
+}
+
+fn escape_op() -> impl Strategy<Value = EscapeOp> {
+    prop_oneof![
+        (
+            44u32..76,
+            44u32..76,
+            prop::bool::weighted(0.05),
+            any::<bool>()
+        )
+            .prop_map(|(i1, i2, stripe, set)| EscapeOp::Write {
+                i1,
+                i2,
+                stripe,
+                set
+            }),
+        // Few places and clearances, so that asks repeat (the kept plan's case).
+        (0i32..2, 0i32..2, any::<bool>()).prop_map(|(a, c, cross)| EscapeOp::Plan {
+            at: [60 + a, 60],
+            toward: [80, 40],
+            clear: 1 + 2 * c,
+            cross,
+        }),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+    /// The escape keeps its last plan while the ask and the window's columns stay; whatever
+    /// was written between the plans, a kept plan is the one fresh bitmaps find, and an ask
+    /// repeated with nothing written reads no word.
+    #[test]
+    fn a_kept_escape_plan_is_the_one_planned_afresh(
+        start in proptest::collection::vec((40u32..80, 40u32..80), 0..400),
+        ops in proptest::collection::vec(escape_op(), 1..80),
+    ) {
+        let mut gram = Gram::new();
+        for &(i1, i2) in &start {
+            gram.write(i1, i2, false, 1);
+        }
+        let mut kept = escape::Scratch::new();
+        let mut prev = None;
+        for op in &ops {
+            match *op {
+                EscapeOp::Write { i1, i2, stripe, set } => gram.write(i1, i2, stripe, set as u32),
+                EscapeOp::Plan { at, toward, clear, cross } => {
+                    let ask = escape::Ask { at_px: at, toward_px: toward, clear_px: clear, cross, prev_px: prev };
+                    let mut g = gram.bus();
+                    let mut m = window::BusMap(&mut g);
+                    let (mut t_kept, mut t_fresh, mut t_again) = (0, 0, 0);
+                    let p = escape::plan(&mut m, &mut kept, &ask, &mut t_kept);
+                    let fresh = escape::plan(&mut m, &mut escape::Scratch::new(), &ask, &mut t_fresh);
+                    prop_assert_eq!(p, fresh, "{:?}", op);
+                    let again = escape::plan(&mut m, &mut kept, &ask, &mut t_again);
+                    prop_assert_eq!(again, fresh);
+                    prop_assert_eq!(t_again, 0, "an ask repeated with nothing written is read again");
+                    prop_assert_eq!(kept.take_vouched(), if t_kept == 0 { 2 } else { 1 } * 32 * 33);
+                    prev = p.map(|p| p.target_px);
+                }
+            }
+        }
+    }
+}
+
 /// A column written after it was read free is read again (its generation moved), and only
 /// that column: the others are vouched for.
 #[test]
