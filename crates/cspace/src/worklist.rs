@@ -368,7 +368,7 @@ fn update<B: GlobalBus + ?Sized>(
     new: &([Disk; MAX_COVER], usize),
     old: &([Disk; MAX_COVER], usize),
     sc: &mut Scratch,
-    mut progress: Progress,
+    progress: Progress,
 ) -> Result<(Flags, Option<Error>), Error> {
     // Every cover disk of a position has the same radius: one check covers them all.
     crate::family(new.0[0].r_um)?;
@@ -377,7 +377,11 @@ fn update<B: GlobalBus + ?Sized>(
         _ => (*old, None),
     };
     let mut f = Flags::default();
-    let mut canvas = BusCanvas(&mut *g);
+    let mut canvas = JobCanvas {
+        bus: BusCanvas(&mut *g),
+        progress,
+        writes: 0,
+    };
     let pairs = new.1.max(old.1);
     sc.log.truncate(0);
     for i in 0..pairs {
@@ -405,11 +409,11 @@ fn update<B: GlobalBus + ?Sized>(
         );
         f.merge(fl);
         sc.logged[2 * i + 1] = ok;
-        progress.mark(canvas.0);
+        canvas.progress.mark(canvas.bus.0);
     }
     // Second half: the old images go.
     f.merge(sc.log.erase(&mut canvas));
-    progress.mark(canvas.0);
+    canvas.progress.mark(canvas.bus.0);
     for i in 0..pairs {
         if let Some(s) = &sc.old_stripes[i] {
             f.merge(raster::stripe(s, &mut canvas, Op::Erase));
@@ -440,17 +444,63 @@ fn update<B: GlobalBus + ?Sized>(
             );
             f.merge(fl);
         }
-        progress.mark(canvas.0);
+        canvas.progress.mark(canvas.bus.0);
     }
     Ok((f, old_err))
 }
 
+/// Columns written between two progress marks of a job: at most some 8 x 3,000 cycles
+/// (a whole column each), 1.5 ms.
+const MARK_EVERY: u32 = 8;
+
+/// The canvas of a job in a claimed work-list entry: the bus's, with the job's progress
+/// marked every [`MARK_EVERY`] writes (a single link-2 image of a moving obstacle's swept
+/// disk took more than the reflex's 20 ms as images, where marks only between images left
+/// the entry looking abandoned: `moving_obstacles.toml` as images held the arm 22 times in
+/// its first 2 s).
+struct JobCanvas<'a, B: GlobalBus + ?Sized> {
+    bus: BusCanvas<'a, B>,
+    progress: Progress,
+    writes: u32,
+}
+
+impl<B: GlobalBus + ?Sized> JobCanvas<'_, B> {
+    /// One more write: every [`MARK_EVERY`]th advances the mark.
+    #[inline(always)]
+    fn tick(&mut self) {
+        self.writes = self.writes.wrapping_add(1);
+        if self.writes % MARK_EVERY == 0 {
+            self.progress.mark(self.bus.0);
+        }
+    }
+}
+
+impl<B: GlobalBus + ?Sized> raster::Canvas for JobCanvas<'_, B> {
+    fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags {
+        self.bus.pixel(i1, i2, mask, op)
+    }
+    fn stripe(&mut self, i1: u32, mask: u32, op: Op) -> Flags {
+        self.bus.stripe(i1, mask, op)
+    }
+    fn run(&mut self, i1: u32, i2: u32, rows: u32, mask: u32, op: Op) -> Flags {
+        self.bus.run(i1, i2, rows, mask, op)
+    }
+    /// Every map write of a job comes here (the stripes' words are a few per image).
+    /// Inlined into the callers (a call of its own cost the bench's worst update 2%).
+    #[inline(always)]
+    fn column(&mut self, i1: u32, i2: u32, pieces: &[u32; 10], op: Op) -> Flags {
+        let f = self.bus.column(i1, i2, pieces, op);
+        self.tick();
+        f
+    }
+}
+
 /// A job's progress marks in its claimed entry's `claim` word (`WorkEntry::claim`): the
 /// board's number in bits 0-7, a count in bits 8-31 advanced after each pair of link-2
-/// images and after the erase. A job can outlast the reflex's limit for an entry claimed
-/// and unchanged (`reflex::health::MAP_TORN_US`, 20 ms; the bench's worst job is 46 ms):
-/// the marks tell it a board is at work there, as a board that died mid-job leaves them
-/// still.
+/// images, after the erase, and every [`MARK_EVERY`] writes between ([`JobCanvas`]). A job
+/// can outlast the reflex's limit for an entry claimed and unchanged
+/// (`reflex::health::MAP_TORN_US`, 20 ms; the bench's worst job is 46 ms): the marks tell
+/// it a board is at work there, as a board that died mid-job leaves them still.
 struct Progress {
     claim: u32,
     me: u32,
