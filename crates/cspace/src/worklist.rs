@@ -452,6 +452,7 @@ fn update<B: GlobalBus + ?Sized>(
 /// Columns written between two progress marks of a job: at most some 8 x 3,000 cycles
 /// (a whole column each), 1.5 ms.
 const MARK_EVERY: u32 = 8;
+const _: () = assert!(MARK_EVERY.is_power_of_two());
 
 /// The canvas of a job in a claimed work-list entry: the bus's, with the job's progress
 /// marked every [`MARK_EVERY`] writes (a single link-2 image of a moving obstacle's swept
@@ -469,7 +470,7 @@ impl<B: GlobalBus + ?Sized> JobCanvas<'_, B> {
     #[inline(always)]
     fn tick(&mut self) {
         self.writes = self.writes.wrapping_add(1);
-        if self.writes % MARK_EVERY == 0 {
+        if self.writes & (MARK_EVERY - 1) == 0 {
             self.progress.mark(self.bus.0);
         }
     }
