@@ -470,6 +470,8 @@ struct MarkWatch<'a> {
     since_mark: u32,
     most: u32,
     marks: u32,
+    /// The words entry 0 was claimed with.
+    claims: Vec<u32>,
 }
 
 impl GlobalBus for MarkWatch<'_> {
@@ -496,7 +498,11 @@ impl GlobalBus for MarkWatch<'_> {
         self.ram.write_u8(off, val)
     }
     fn cas_u32(&mut self, off: u32, current: u32, new: u32) -> u32 {
-        self.ram.cas_u32(off, current, new)
+        let found = self.ram.cas_u32(off, current, new);
+        if off == vme_map::layout::work_entry(0) && found == current {
+            self.claims.push(new);
+        }
+        found
     }
 }
 
@@ -529,6 +535,7 @@ fn a_job_marks_its_progress_while_it_draws() {
             since_mark: 0,
             most: 0,
             marks: 0,
+            claims: Vec::new(),
         };
         // One round of the cursor: entry 0's job among the others'.
         for _ in 0..worklist::OBSTACLE_BEACONS.len() {
@@ -542,4 +549,38 @@ fn a_job_marks_its_progress_while_it_draws() {
             watch.most
         );
     }
+}
+
+/// Consecutive jobs on an entry claim it with different words, even when neither draws
+/// (the reflex reads an entry every few milliseconds and takes a claim word unchanged for
+/// 20 ms for an abandoned job: two jobs that both showed board 1's bare number looked like
+/// one that stood still).
+#[test]
+fn consecutive_jobs_on_an_entry_claim_it_with_different_words() {
+    use vme_map::records::{beacon_flags, ObjectTable};
+    let mut global = vec![0u8; vme_map::GLOBAL_RAM_SIZE as usize];
+    let mut sc = Box::new(worklist::Scratch::new());
+    let mut t = ObjectTable {
+        frame: 1,
+        ..Default::default()
+    };
+    let b = &mut t.beacons[worklist::OBSTACLE_BEACONS[0] as usize];
+    (b.x_um, b.y_um, b.t_us, b.flags) = (200_000, 0, 1_000, beacon_flags::VALID);
+    vme_map::ArrayBus::new(&mut global).write_u32(vme_map::layout::OBSTACLE_RADII, 25_000);
+    let mut watch = MarkWatch {
+        ram: vme_map::ArrayBus::new(&mut global),
+        since_mark: 0,
+        most: 0,
+        marks: 0,
+        claims: Vec::new(),
+    };
+    // Three rounds of the cursor with the same table: the first job draws, the others
+    // find nothing to do.
+    for _ in 0..3 * worklist::OBSTACLE_BEACONS.len() {
+        worklist::step(&mut watch, 1, &t, &mut sc);
+    }
+    let c = &watch.claims;
+    assert_eq!(c.len(), 3, "{c:x?}");
+    assert!(c.iter().all(|w| w & 0xFF == 1), "{c:x?}");
+    assert!(c[0] != c[1] && c[1] != c[2] && c[0] != c[2], "{c:x?}");
 }

@@ -387,6 +387,7 @@ fn update<B: GlobalBus + ?Sized>(
     for i in 0..pairs {
         images_of(new, i, &mut sc.new);
         images_of(&old, i, &mut sc.old);
+        canvas.mark();
         if let Some(s) = &sc.new.stripe {
             f.merge(raster::stripe(s, &mut canvas, Op::Draw));
         }
@@ -400,6 +401,7 @@ fn update<B: GlobalBus + ?Sized>(
         );
         f.merge(fl);
         sc.logged[2 * i] = ok;
+        canvas.mark();
         let (fl, ok) = raster::pair(
             &mut sc.old.rear,
             &sc.new.rear,
@@ -409,11 +411,11 @@ fn update<B: GlobalBus + ?Sized>(
         );
         f.merge(fl);
         sc.logged[2 * i + 1] = ok;
-        canvas.progress.mark(canvas.bus.0);
+        canvas.mark();
     }
     // Second half: the old images go.
     f.merge(sc.log.erase(&mut canvas));
-    canvas.progress.mark(canvas.bus.0);
+    canvas.mark();
     for i in 0..pairs {
         if let Some(s) = &sc.old_stripes[i] {
             f.merge(raster::stripe(s, &mut canvas, Op::Erase));
@@ -444,7 +446,7 @@ fn update<B: GlobalBus + ?Sized>(
             );
             f.merge(fl);
         }
-        canvas.progress.mark(canvas.bus.0);
+        canvas.mark();
     }
     Ok((f, old_err))
 }
@@ -466,6 +468,13 @@ struct JobCanvas<'a, B: GlobalBus + ?Sized> {
 }
 
 impl<B: GlobalBus + ?Sized> JobCanvas<'_, B> {
+    /// One more mark (not inlined: the job's loop drew a condition-code clobber with the
+    /// marks inline, refused by `cargo xtask images`).
+    #[inline(never)]
+    fn mark(&mut self) {
+        self.progress.mark(self.bus.0);
+    }
+
     /// One more write: every [`MARK_EVERY`]th advances the mark.
     #[inline(always)]
     fn tick(&mut self) {
@@ -487,8 +496,8 @@ impl<B: GlobalBus + ?Sized> raster::Canvas for JobCanvas<'_, B> {
         self.bus.run(i1, i2, rows, mask, op)
     }
     /// Every map write of a job comes here (the stripes' words are a few per image).
-    /// Inlined into the callers (a call of its own cost the bench's worst update 2%).
-    #[inline(always)]
+    /// Not `#[inline(always)]`: inlined into its callers (1% faster) the image misdrew the
+    /// work list (`bench cspace`'s image-against-host check, table 4).
     fn column(&mut self, i1: u32, i2: u32, pieces: &[u32; 10], op: Op) -> Flags {
         let f = self.bus.column(i1, i2, pieces, op);
         self.tick();
@@ -497,30 +506,42 @@ impl<B: GlobalBus + ?Sized> raster::Canvas for JobCanvas<'_, B> {
 }
 
 /// A job's progress marks in its claimed entry's `claim` word (`WorkEntry::claim`): the
-/// board's number in bits 0-7, a count in bits 8-31 advanced after each pair of link-2
-/// images, after the erase, and every [`MARK_EVERY`] writes between ([`JobCanvas`]). A job
+/// board's number in bits 0-7, the cursor's count when the job took the entry in bits
+/// 20-31 ([`TAG_CURSOR`]), and a count in bits 8-19 advanced once a cover disk's images
+/// are made, after each link-2 image, after the erase, and every [`MARK_EVERY`] columns
+/// written between ([`JobCanvas`]). A job
 /// can outlast the reflex's limit for an entry claimed and unchanged
 /// (`reflex::health::MAP_TORN_US`, 20 ms; the bench's worst job is 46 ms): the marks tell
 /// it a board is at work there, as a board that died mid-job leaves them still.
 struct Progress {
     claim: u32,
-    me: u32,
+    tag: u32,
     n: u32,
 }
 
+/// The cursor's count in a claim, bits 20-31: consecutive jobs on an entry claim it with
+/// different words, so the reflex, reading an entry every few milliseconds, never takes two
+/// jobs for one that stood still (with the count alone a job that made no mark, then the
+/// next one on the entry, read the same `1`, and a 3-board run as images held the arm on
+/// a `TornRecord`).
+const TAG_CURSOR: u32 = 0xFFF;
+/// The marks' count in a claim, bits 8-19.
+const TAG_MARKS: u32 = 0xFFF;
+
 impl Progress {
-    /// Marks in the `claim` word at `claim` for board number `me` (1-3); `me` 0 marks
-    /// nothing (a move with no work-list entry, [`move_disk`]).
-    fn new(claim: u32, me: u32) -> Self {
-        Self { claim, me, n: 0 }
+    /// Marks in the `claim` word at `claim`, claimed with `tag` (the board's number 1-3 and
+    /// the cursor's count, [`TAG_CURSOR`]); `tag` 0 marks nothing (a move with no work-list
+    /// entry, [`move_disk`]).
+    fn new(claim: u32, tag: u32) -> Self {
+        Self { claim, tag, n: 0 }
     }
 
     /// One more mark.
     #[inline(never)]
     fn mark<B: GlobalBus + ?Sized>(&mut self, g: &mut B) {
-        self.n = self.n.wrapping_add(1) & 0x00FF_FFFF;
-        if self.me != 0 {
-            g.write_u32(self.claim, self.me | (self.n << 8));
+        self.n = self.n.wrapping_add(1) & TAG_MARKS;
+        if self.tag != 0 {
+            g.write_u32(self.claim, self.tag | (self.n << 8));
         }
     }
 }
@@ -582,9 +603,12 @@ pub fn step_words<B: GlobalBus + ?Sized>(
     objects: &[u32; OBJECT_WORDS],
     sc: &mut Scratch,
 ) -> Outcome {
-    let i = next_entry(g);
+    let c = take_cursor(g);
+    let i = fx::rem_u32(c, OBSTACLE_BEACONS.len() as u32);
     let claim = work_entry(i);
-    if g.cas_u32(claim, 0, me) != 0 {
+    // The claim: the board's number and the cursor's count ([`Progress`]).
+    let tag = me | ((c & TAG_CURSOR) << 20);
+    if g.cas_u32(claim, 0, tag) != 0 {
         return Outcome {
             entry: i,
             busy: true,
@@ -593,7 +617,7 @@ pub fn step_words<B: GlobalBus + ?Sized>(
     }
     let mut e = entry(g, i);
     let b = beacon_of(objects, i);
-    let out = job(g, i, &b, &mut e, sc, me);
+    let out = job(g, i, &b, &mut e, sc, tag);
     // Write the entry back with the claim still ours, then release it last.
     e.encode(&mut |w, v| {
         if w != 0 {
@@ -604,14 +628,15 @@ pub fn step_words<B: GlobalBus + ?Sized>(
     out
 }
 
-/// The semaphore: advances the shared cursor atomically and returns the entry it pointed at.
+/// The semaphore: advances the shared cursor atomically and returns the count it took (the
+/// entry is that modulo the number of entries).
 #[inline(never)]
-fn next_entry<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
+fn take_cursor<B: GlobalBus + ?Sized>(g: &mut B) -> u32 {
     let mut c = g.read_u32(WORK_CURSOR);
     loop {
         let found = g.cas_u32(WORK_CURSOR, c, c.wrapping_add(1));
         if found == c {
-            return fx::rem_u32(c, OBSTACLE_BEACONS.len() as u32);
+            return c;
         }
         c = found;
     }
@@ -647,7 +672,8 @@ fn if_drawn(n: usize, state: u32) -> usize {
     n & ((state & DRAWN) as usize).wrapping_neg()
 }
 
-/// The work on claimed entry `i` (held in `e`, updated in place) for beacon sample `b`.
+/// The work on claimed entry `i` (held in `e`, updated in place) for beacon sample `b`,
+/// claimed with `tag` ([`Progress`]).
 #[inline(never)]
 fn job<B: GlobalBus + ?Sized>(
     g: &mut B,
@@ -655,7 +681,7 @@ fn job<B: GlobalBus + ?Sized>(
     b: &Beacon,
     e: &mut WorkEntry,
     sc: &mut Scratch,
-    me: u32,
+    tag: u32,
 ) -> Outcome {
     let mut out = Outcome {
         entry: i,
@@ -684,7 +710,7 @@ fn job<B: GlobalBus + ?Sized>(
     let o = folded(e.x_um, e.y_um, e.r_um, e.state & FOLD_MASK);
     let mut old = cover(o.x_um, o.y_um, was_x, was_y, o.r_um);
     old.1 = if_drawn(old.1, e.state);
-    match update(g, &new, &old, sc, Progress::new(work_entry(i), me)) {
+    match update(g, &new, &old, sc, Progress::new(work_entry(i), tag)) {
         Ok((f, err)) => {
             out.flags.merge(f);
             out.error = err;

@@ -436,9 +436,10 @@ record! {
     /// [`crate::GlobalBus::cas_u32`] (from 0); while it is held, the entry, `claim`
     /// included, has exactly one writer, the board whose claim succeeded.
     pub struct WorkEntry {
-        /// 0 = free, otherwise 1 + index of the claiming board in bits 0-7 and, in bits
-        /// 8-31, a count the board advances as its job goes on (so a long job is told from
-        /// an abandoned one).
+        /// 0 = free, otherwise 1 + index of the claiming board in bits 0-7, a count the
+        /// board advances as its job goes on in bits 8-19 (so a long job is told from an
+        /// abandoned one), and the work cursor's count the job took the entry at in bits
+        /// 20-31 (so two jobs on the entry are told apart).
         pub claim: u32,
         /// Beacon whose obstacle this job transforms.
         pub beacon: u32,
