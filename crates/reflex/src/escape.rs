@@ -181,7 +181,8 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
     if !m.has_gens() {
         return 0;
     }
-    let c0 = (ask.at_px[0] - HALF) as u32;
+    // The window's first column, in 0..128 (the arm's pixel is unwrapped).
+    let c0 = ((ask.at_px[0] - HALF) & 127) as u32;
     let mut moved = 0;
     let mut k = 0;
     while k < WIN {
