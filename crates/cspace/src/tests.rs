@@ -474,6 +474,19 @@ struct MarkWatch<'a> {
     claims: Vec<u32>,
 }
 
+impl<'a> MarkWatch<'a> {
+    /// Watching `global`, nothing counted yet.
+    fn new(global: &'a mut [u8]) -> Self {
+        MarkWatch {
+            ram: vme_map::ArrayBus::new(global),
+            since_mark: 0,
+            most: 0,
+            marks: 0,
+            claims: Vec::new(),
+        }
+    }
+}
+
 impl GlobalBus for MarkWatch<'_> {
     fn read_u32(&mut self, off: u32) -> u32 {
         self.ram.read_u32(off)
@@ -530,13 +543,7 @@ fn a_job_marks_its_progress_while_it_draws() {
         let b = &mut t.beacons[worklist::OBSTACLE_BEACONS[0] as usize];
         (b.x_um, b.y_um, b.t_us, b.flags) = (x, 20_000, 100_000 * (k as u32 + 1), flags);
         vme_map::ArrayBus::new(&mut global).write_u32(vme_map::layout::OBSTACLE_RADII, 40_000);
-        let mut watch = MarkWatch {
-            ram: vme_map::ArrayBus::new(&mut global),
-            since_mark: 0,
-            most: 0,
-            marks: 0,
-            claims: Vec::new(),
-        };
+        let mut watch = MarkWatch::new(&mut global);
         // One round of the cursor: entry 0's job among the others'.
         for _ in 0..worklist::OBSTACLE_BEACONS.len() {
             let out = worklist::step(&mut watch, 1, &t, &mut sc);
@@ -567,13 +574,7 @@ fn consecutive_jobs_on_an_entry_claim_it_with_different_words() {
     let b = &mut t.beacons[worklist::OBSTACLE_BEACONS[0] as usize];
     (b.x_um, b.y_um, b.t_us, b.flags) = (200_000, 0, 1_000, beacon_flags::VALID);
     vme_map::ArrayBus::new(&mut global).write_u32(vme_map::layout::OBSTACLE_RADII, 25_000);
-    let mut watch = MarkWatch {
-        ram: vme_map::ArrayBus::new(&mut global),
-        since_mark: 0,
-        most: 0,
-        marks: 0,
-        claims: Vec::new(),
-    };
+    let mut watch = MarkWatch::new(&mut global);
     // Three rounds of the cursor with the same table: the first job draws, the others
     // find nothing to do.
     for _ in 0..3 * worklist::OBSTACLE_BEACONS.len() {
