@@ -457,10 +457,10 @@ const MARK_EVERY: u32 = 8;
 const _: () = assert!(MARK_EVERY.is_power_of_two());
 
 /// The canvas of a job in a claimed work-list entry: the bus's, with the job's progress
-/// marked every [`MARK_EVERY`] writes (a single link-2 image of a moving obstacle's swept
-/// disk took more than the reflex's 20 ms as images, where marks only between images left
-/// the entry looking abandoned: `moving_obstacles.toml` as images held the arm 22 times in
-/// its first 2 s).
+/// marked every [`MARK_EVERY`] columns written (a single link-2 image of a moving obstacle's
+/// swept disk took more than the reflex's 20 ms as images, where marks only between images
+/// left the entry looking abandoned: `moving_obstacles.toml` as images held the arm 22
+/// times in its first 2 s).
 struct JobCanvas<'a, B: GlobalBus + ?Sized> {
     bus: BusCanvas<'a, B>,
     progress: Progress,
@@ -475,7 +475,7 @@ impl<B: GlobalBus + ?Sized> JobCanvas<'_, B> {
         self.progress.mark(self.bus.0);
     }
 
-    /// One more write: every [`MARK_EVERY`]th advances the mark.
+    /// One more column written: every [`MARK_EVERY`]th advances the mark.
     #[inline(always)]
     fn tick(&mut self) {
         self.writes = self.writes.wrapping_add(1);
@@ -509,10 +509,10 @@ impl<B: GlobalBus + ?Sized> raster::Canvas for JobCanvas<'_, B> {
 /// board's number in bits 0-7, the cursor's count when the job took the entry in bits
 /// 20-31 ([`TAG_CURSOR`]), and a count in bits 8-19 advanced once a cover disk's images
 /// are made, after each link-2 image, after the erase, and every [`MARK_EVERY`] columns
-/// written between ([`JobCanvas`]). A job
-/// can outlast the reflex's limit for an entry claimed and unchanged
-/// (`reflex::health::MAP_TORN_US`, 20 ms; the bench's worst job is 46 ms): the marks tell
-/// it a board is at work there, as a board that died mid-job leaves them still.
+/// written between ([`JobCanvas`]). A job can outlast the reflex's limit for an entry
+/// claimed and unchanged (`reflex::health::MAP_TORN_US`, 20 ms; the bench's worst job is
+/// 46 ms): the marks tell it a board is at work there, as a board that died mid-job leaves
+/// them still.
 struct Progress {
     claim: u32,
     tag: u32,
