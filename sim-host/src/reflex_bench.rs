@@ -7,8 +7,10 @@
 //!   11.5 and 40.3 rad/s: the thesis's 214 pixels in 4.4 ms); at the thesis's expected top
 //!   speeds (29 and 55 rad/s, arrest region 32 x 32 pixels: the 146 kHz it needed), held
 //!   and with the angles advancing; among obstacles, static and with one redrawn every
-//!   10 ms (the known columns read again); and escaping. Free space is the worst case
-//!   (thesis: the window is largest there).
+//!   10 ms (the known columns read again); and escaping, with the map still (the escape
+//!   keeps its plan) and with an obstacle redrawn every 10 ms (it plans again). Free space
+//!   is the worst case for the window (thesis: the window is largest there). With `--top N`
+//!   each case's N costliest functions follow it.
 //! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
 //!   (native mode): the reflex must not slow the arm.
 
