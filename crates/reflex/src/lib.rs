@@ -756,7 +756,8 @@ impl Reflex {
         // wall (an obstacle that does come on is then met by the next pass's rectangle while
         // the arm can still brake or back off).
         let border_u_s = self.cfg.border_px_s * PIX_U;
-        let obs_lat = fx::mul_shr(border_u_s, lat_us * US_TO_S_Q32, 32) + 1;
+        let lat_q32 = lat_us * US_TO_S_Q32;
+        let obs_lat = fx::mul_shr(border_u_s, lat_q32, 32) + 1;
         // Among moving obstacles (the sensing board flags them) the arm also keeps the
         // distance they cover in the time it takes to react ([`REACT_US`]), and evades
         // once they come closer.
@@ -764,9 +765,9 @@ impl Reflex {
         // Built by `prepare` in place, spans and all (two `Axis::default()` filled after
         // cost two `memset` calls a pass on the 68020).
         let m = Margins {
-            lat_us,
-            obs: obs_lat,
-            wide,
+            lat_q32,
+            base: MARGIN_U + obs_lat + wide,
+            own: MARGIN_U + wide,
         };
         let (goal_u, prev_u) = (self.goal_units.of(&goal_urad), self.prev_units.of(&prev));
         let a1 = prepare(0, sv, &prev, &prev_u, &goal_u, &m);
@@ -1023,13 +1024,16 @@ struct Axis {
     rest: Span,
 }
 
-/// What every axis's spans are widened by: the latency (microseconds), the margin for
-/// obstacles moving during it and the one for moving obstacles' reaction time (0 when none
-/// moves), angle units.
+/// What every axis's spans are widened by, computed once for both axes: the latency, and
+/// in angle units the fixed margin with the one for obstacles moving during the latency and
+/// the one for moving obstacles' reaction time (0 when none moves).
 struct Margins {
-    lat_us: i32,
-    obs: i32,
-    wide: i32,
+    /// The latency in Q32 seconds.
+    lat_q32: i32,
+    /// The base and rest rectangles' margin: fixed, obstacle motion, reaction.
+    base: i32,
+    /// The arm's own neighbourhood's margin: fixed and reaction.
+    own: i32,
 }
 
 /// Axis `i`'s state: its arithmetic, then its base rectangle, arrest region and own
@@ -1043,7 +1047,7 @@ fn prepare(
     goal_u: &[i32; 2],
     m: &Margins,
 ) -> Axis {
-    let lat_q32 = m.lat_us * US_TO_S_Q32;
+    let lat_q32 = m.lat_q32;
     let omega_urad_s = sv.omega_urad_s[i];
     let w = masks::abs(urad_to_u(omega_urad_s));
     // The arrest point advances at up to 2 omega (V.6) while the state is in transit.
@@ -1067,11 +1071,11 @@ fn prepare(
     let outside = masks::lt(arrest, glo - tol) | masks::lt(ghi + tol, arrest);
     let blo = masks::min(glo, masks::pick(outside, lo, arrest));
     let bhi = masks::max(ghi, masks::pick(outside, hi, arrest));
-    let mb = MARGIN_U + m.obs + m.wide;
+    let mb = m.base;
     // The arm itself over the latency.
     let fwd = reach_u & !back;
     let bwd = reach_u & back;
-    let mo = MARGIN_U + m.wide;
+    let mo = m.own;
     Axis {
         theta_urad: sv.theta_urad[i],
         arrest_urad: sv.arrest_urad[i],
