@@ -87,6 +87,18 @@ fn planner(goal: [f64; 2], k: u32) -> GoalInput {
     }
 }
 
+/// Pass `k`'s inputs for an arm resting at (0, 0) with the planner's goal (1, 1) rad and
+/// `health` (the fail-safe tests).
+fn resting_at_origin(k: u32, health: HealthInput) -> Input {
+    Input {
+        servo: Some(servo_at([0.0, 0.0], [0.0, 0.0], k)),
+        goal: planner([1.0, 1.0], k),
+        health,
+        obstacles_moving: false,
+        obstacles: [ObstacleView::NONE; OBSTACLES],
+    }
+}
+
 /// Runs `n` passes at rest at `theta` toward `goal`; returns the last output.
 fn at_rest(m: &TestMap, theta: [f64; 2], goal: [f64; 2], n: u32) -> Output {
     let mut r = Reflex::default();
@@ -325,16 +337,7 @@ fn a_torn_map_update_and_a_lagging_image_hold_the_arm() {
                     _ => h.objects_frame = 10,
                 }
             }
-            let o = r.step(
-                &Input {
-                    servo: Some(servo_at([0.0, 0.0], [0.0, 0.0], k)),
-                    goal: planner([1.0, 1.0], k),
-                    health: h,
-                    obstacles_moving: false,
-                    obstacles: [ObstacleView::NONE; OBSTACLES],
-                },
-                &mut m.map(),
-            );
+            let o = r.step(&resting_at_origin(k, h), &mut m.map());
             if let Some(Fault::Input(p)) = o.new_fault {
                 got.get_or_insert((k, p));
             }
@@ -1030,16 +1033,7 @@ fn a_long_cspace_job_that_marks_its_progress_is_neither_torn_nor_stale() {
                     ..Default::default()
                 };
             }
-            let o = r.step(
-                &Input {
-                    servo: Some(servo_at([0.0, 0.0], [0.0, 0.0], k)),
-                    goal: planner([1.0, 1.0], k),
-                    health: h,
-                    obstacles_moving: false,
-                    obstacles: [ObstacleView::NONE; OBSTACLES],
-                },
-                &mut m.map(),
-            );
+            let o = r.step(&resting_at_origin(k, h), &mut m.map());
             fault = fault.or(o.new_fault);
         }
         if marks {
