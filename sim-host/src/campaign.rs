@@ -330,13 +330,15 @@ pub fn link1_trapped_s(
                 _ => merged.push((s, l)),
             }
         }
-        // The last may reach round past the first.
+        // The last may reach round past the first: it swallows it and stays last, so the
+        // list keeps its order by start (the gaps below are taken between neighbours).
         while merged.len() > 1 {
             let (first, last) = (merged[0], merged[merged.len() - 1]);
             if last.0 + last.1 >= first.0 + TAU {
                 let end = (first.0 + first.1 + TAU).max(last.0 + last.1);
-                merged.pop();
-                merged[0] = (last.0, end - last.0);
+                merged.remove(0);
+                let n = merged.len();
+                merged[n - 1] = (last.0, end - last.0);
             } else {
                 break;
             }
@@ -1082,6 +1084,59 @@ mod tests {
                 let c = config(-2.0, 0.2);
                 assert_eq!(trapped_s(c.start_rad, &c.obstacles, c.duration_s), None);
             }
+        }
+    }
+
+    /// The oracle does not depend on where theta1 = 0 lies: seed 1's sensed moving scene
+    /// 121 (five disks circling, four of them in link 1's reach), turned by each of 64
+    /// angles, traps the arm when the two bands round it meet (3.87 s, by the bands' exact
+    /// edges sampled every 10 ms), the same time at every angle. Until 2026-11-27 a band
+    /// merged across the seam was put first in the list, out of order, and the gap after
+    /// the last band then ran round the whole circle: the scene as drawn (its bands meeting
+    /// across the seam) was taken for survivable, and the reflex campaign counted its
+    /// unavoidable contact.
+    #[test]
+    fn the_trap_oracle_is_the_same_wherever_the_seam_lies() {
+        // (x m, y m, radius m, period s) of scene 121's disks at t = 0.
+        let scene: [(f64, f64, f64, f64); 5] = [
+            (-0.2103678651577103, 0.17443372938987056, 0.028259356618604993, -10.471891574958864),
+            (0.1396031810778677, -0.25842349187359176, 0.024917378913755967, -5.089173566043644),
+            (0.21395563779281843, 0.09982664320569153, 0.02760857937818996, -5.353857120961673),
+            (0.15636454893513807, 0.28758305663253864, 0.02577361548401845, -13.087432988390741),
+            (0.15084597698158683, 0.25163577889916, 0.019969973503133877, -8.348628126695607),
+        ];
+        let start = -2.71525200929503;
+        // When the arm's gap closes, from the bands' exact edges: the arm's gap is the one
+        // holding it at t = 0, followed as the bands turn.
+        let turned = |by: f64| -> Vec<Obstacle> {
+            scene
+                .iter()
+                .map(|&(x, y, r, period_s)| {
+                    let (d, a) = (x.hypot(y), y.atan2(x) + by);
+                    Obstacle {
+                        start: Disk {
+                            x_m: d * a.cos(),
+                            y_m: d * a.sin(),
+                            r_m: r,
+                        },
+                        motion: Motion::Circle {
+                            cx_m: 0.0,
+                            cy_m: 0.0,
+                            period_s,
+                        },
+                    }
+                })
+                .collect()
+        };
+        let t0 = link1_trapped_s(start, &turned(0.0), 4.0).expect("the arm's gap closes");
+        assert!((3.86..3.89).contains(&t0), "{t0}");
+        for k in 1..64 {
+            let by = TAU * k as f64 / 64.0;
+            let t = link1_trapped_s(start + by, &turned(by), 4.0);
+            assert!(
+                t.is_some_and(|t| (t - t0).abs() < 0.002),
+                "turned by {by:.3} rad: {t:?} against {t0}"
+            );
         }
     }
 
