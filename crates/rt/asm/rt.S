@@ -708,9 +708,9 @@ __fx_mul_shr:
     subq.w  #1, %d6                 /* saturates at 0xFFFF */
 4:  move.w  %d6, F_MOVED(%a0)
     tst.l   \a+12(%sp)
-    beq.s   20f                     /* not adaptive: no movement check, the short window */
+    beq.w   20f                     /* not adaptive: no movement check, the short window */
     cmpi.w  #32, %d5
-    bls.s   20f                     /* since <= SHORT: the short window */
+    bls.w   20f                     /* since <= SHORT: the short window */
     /* movement check: |short mean - mean since rest| > MOVE_Q5 (896) on either axis */
     move.l  F_SINCE(%a0), %d0
     asr.l   #3, %d0
@@ -743,6 +743,9 @@ __fx_mul_shr:
     neg.l   %d2
 6:  cmpi.l  #896, %d2
     bgt.s   7f
+    /* no movement now, but one within MOVING_HOLD samples: the short window still */
+    cmpi.w  #128, F_MOVED(%a0)      /* sensing::filter::MOVING_HOLD */
+    bcs.w   20f
     /* at rest: the long window, d0/d1 its means, d5 its length */
     cmpi.w  #8, F_COUNT(%a0)
     bcs.w   40f

@@ -6,9 +6,11 @@
 //! Movement is detected when the short mean leaves the mean since rest by more than
 //! [`MOVE_Q5`] (28 codes: 6 standard deviations of their difference at the model's noise;
 //! in codes, so the same everywhere in the field); the long window then restarts from the
-//! short one and grows again while the beacon rests. Means use a table of reciprocals, not
-//! divisions (the 68020's slot budget). A beacon that creeps slower than the threshold can
-//! show up to [`MOVE_Q5`] of extra lag (about 5 mm at the centre).
+//! short one and grows again, and is published once no movement has been found for
+//! [`MOVING_HOLD`] samples (until then the short window is). Means use a table of
+//! reciprocals, not divisions (the 68020's slot budget). A beacon that creeps so slowly
+//! that it is not found moving again within [`MOVING_HOLD`] samples can show up to
+//! [`MOVE_Q5`] of extra lag (about 5 mm at the centre) between detections.
 
 /// Largest window, samples (512 ms at 500 Hz per beacon).
 pub const LONG: usize = 256;
@@ -22,7 +24,9 @@ pub const MIN_VALID: u16 = 8;
 /// often; held for [`SHORT`] samples alone, the flag lapsed in between, the beacon was
 /// published from the long window up to 12 mm behind and the C-space board drew it unswept
 /// (docs/reflex.md). Measured by `sim-host campaign reflex --moving 500 --seed 1`: scenes
-/// with collisions 45 at 32 samples, 31 at 64, 27 at 96, 128, 192 and 256.
+/// with collisions 45 at 32 samples, 31 at 64, 27 at 96, 128, 192 and 256. While the flag
+/// is up the estimate is the short window's (since 2026-11-27; before, the window since
+/// the last detection once it held more than [`SHORT`] samples).
 pub const MOVING_HOLD: u16 = 128;
 /// Where `moved` starts in a fresh or reset filter: flagged moving for its first
 /// [`SHORT`] samples.
@@ -218,15 +222,21 @@ impl Filter {
         }
     }
 
-    /// The estimate, or `None` with fewer than [`MIN_VALID`] samples: with `adaptive`, the
-    /// mean of every sample since the beacon last moved (up to [`LONG`]); else, or when
-    /// that is fewer than 32, the thesis's 32 (fewer while filling).
+    /// The estimate, or `None` with fewer than [`MIN_VALID`] samples: with `adaptive` and
+    /// no movement found for [`MOVING_HOLD`] samples, the mean of every sample since the
+    /// beacon last moved (up to [`LONG`]); else, or when that is fewer than 32, the
+    /// thesis's 32 (fewer while filling).
     pub fn estimate(&self, adaptive: bool) -> Option<Estimate> {
         let n = self.count;
         if n < MIN_VALID {
             return None;
         }
-        let long = adaptive && self.since as usize > SHORT;
+        // The long window only once the beacon has rested for MOVING_HOLD samples: while
+        // it moves, the window since the last detection grows between detections and its
+        // mean falls behind by up to the threshold (a disk circling at 66 mm/s was
+        // published 12 mm behind, flagged moving; docs/sensing.md).
+        let moving = self.moved < MOVING_HOLD;
+        let long = adaptive && self.since as usize > SHORT && !moving;
         let window = if long {
             self.since
         } else {
@@ -246,7 +256,7 @@ impl Filter {
         Some(Estimate {
             q5,
             samples: window.min(255),
-            moving: adaptive && self.moved < MOVING_HOLD,
+            moving: adaptive && moving,
             filling: if adaptive {
                 (window as usize) < LONG
             } else {
