@@ -71,6 +71,46 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// The disk a C-space job draws for a reading (`cspace::worklist::drawn_disk`) holds an
+    /// obstacle of the same radius anywhere within the sensing board's tolerance of the
+    /// reading (`beacon_flags::TOLERANCE_UM`): no pixel holding a collision with the
+    /// obstacle where it is is free. The obstacles' radii are those the database's families
+    /// hold with no room to spare, so that only the tolerance can cover the offset. (Drawn
+    /// where it was read, a disk 1 mm off left such pixels free next to the arm in the
+    /// reflex campaign's static scenes.)
+    #[test]
+    fn a_reading_off_by_the_sensing_tolerance_still_covers_its_obstacle(
+        seed: u64, family in 1usize..6, under in 0i32..300, bearing in -3.2f64..3.2,
+        off in 0.5f64..=1.0,
+    ) {
+        let truth = Disk {
+            r_um: cspace::db::FAMILIES[family].disk_r_um - cspace::POLAR_MARGIN_UM - under,
+            ..random_disk(seed, 0)
+        };
+        let tol = vme_map::records::beacon_flags::TOLERANCE_UM as f64;
+        // The reading, off by at most the tolerance (each coordinate rounded toward the
+        // obstacle keeps it within).
+        let toward = |v: f64| v.trunc() as i32;
+        let (dx, dy) = (off * tol * bearing.cos(), off * tol * bearing.sin());
+        let read = (truth.x_um + toward(dx), truth.y_um + toward(dy));
+        let drawn = cspace::worklist::drawn_disk(read.0, read.1, truth.r_um, 0);
+        let Ok(im) = cspace::images(&drawn) else { return Ok(()) };
+        let mut m = cspace::Memory::default();
+        cspace::apply(&im, &mut m.canvas(), cspace::Op::Draw);
+        for i2 in 0..128 {
+            for i1 in 0..128 {
+                prop_assert!(
+                    m.occupied(i1, i2) || pixel(&truth, i1, i2) != Verdict::Collides,
+                    "({}, {}) free: {:?} read at {:?}", i1, i2, truth, read
+                );
+            }
+        }
+    }
+}
+
 /// The C-space image on the emulated 68020 computes the same work list, map and stripe layer
 /// as the native code, bit for bit, for six obstacles moving through every region of
 /// fig. IV.7 (with sweeps and a blinking beacon). Each of the 68k backend miscompiles this

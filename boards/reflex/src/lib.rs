@@ -296,7 +296,7 @@ fn obstacles<G: GlobalBus>(
             beacon_word(objects, b, 1) as i32,
         );
         let fold = worklist::fold_of(x, y, beacon_word(objects, b, 3), &area);
-        let d = worklist::folded(x, y, worklist::radius(g, i as u32), fold);
+        let d = worklist::drawn_disk(x, y, worklist::radius(g, i as u32), fold);
         let o = &mut v[i];
         o.valid = valid;
         o.x_um = d.x_um;

@@ -339,7 +339,7 @@ proptest! {
             }
             let e = worklist::entry(&mut vme_map::ArrayBus::new(&mut global), 0);
             let mut want = Memory::default();
-            if let Ok(im) = images(&Disk { x_um: e.x_um, y_um: e.y_um, r_um: e.r_um }) {
+            if let Ok(im) = images(&worklist::drawn_disk(e.x_um, e.y_um, e.r_um, 0)) {
                 apply(&im, &mut want.canvas(), Op::Draw);
             }
             let (map, stripes) = bus_map(&mut global);
@@ -452,7 +452,7 @@ proptest! {
             prop_assert_eq!(fold, worklist::fold_of(x, y, flags, &AREA_UM), "fold after move {}", k);
             prop_assert_eq!((e.x_um, e.y_um), (x, y));
             let mut want = Memory::default();
-            let d = worklist::folded(e.x_um, e.y_um, e.r_um, fold);
+            let d = worklist::drawn_disk(e.x_um, e.y_um, e.r_um, fold);
             if let Ok(im) = images(&d) {
                 apply(&im, &mut want.canvas(), Op::Draw);
             }

@@ -83,6 +83,14 @@ pub fn fold_of(x_um: i32, y_um: i32, flags: u32, area_um: &[i32; 4]) -> u32 {
     bits & ext.wrapping_neg()
 }
 
+/// The disk the C-space boards draw for an obstacle of radius `r_um` read at (`x_um`,
+/// `y_um`) with the fold `bits`: [`folded`], its radius grown first by the sensing board's
+/// tolerance (`beacon_flags::TOLERANCE_UM`, 3 mm), so that the image holds the obstacle
+/// wherever the reading may have put it. The reflex's evasion takes the same disk.
+pub fn drawn_disk(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
+    folded(x_um, y_um, r_um + beacon_flags::TOLERANCE_UM, bits)
+}
+
 /// The disk that covers an obstacle of radius `r_um` read at (`x_um`, `y_um`) wherever the
 /// fold `bits` ([`fold_of`]) may have put it. Beyond one side of the calibrated square the
 /// detector's edge folds the spot back: a beacon the arm can touch reads up to ~140 mm
@@ -702,12 +710,13 @@ fn job<B: GlobalBus + ?Sized>(
     if !needs_redraw(e, b, fold) {
         return out;
     }
-    // New image first, then the old one goes: no void ever opens.
+    // New image first, then the old one goes: no void ever opens. (The entry keeps the
+    // obstacle's own radius; both disks are grown by the sensing board's tolerance.)
     let r_um = radius(g, i);
-    let n = folded(b.x_um, b.y_um, r_um, fold);
+    let n = drawn_disk(b.x_um, b.y_um, r_um, fold);
     let new = cover(n.x_um, n.y_um, sx, sy, n.r_um);
     let (was_x, was_y) = sweep_of(e);
-    let o = folded(e.x_um, e.y_um, e.r_um, e.state & FOLD_MASK);
+    let o = drawn_disk(e.x_um, e.y_um, e.r_um, e.state & FOLD_MASK);
     let mut old = cover(o.x_um, o.y_um, was_x, was_y, o.r_um);
     old.1 = if_drawn(old.1, e.state);
     match update(g, &new, &old, sc, Progress::new(work_entry(i), tag)) {

@@ -48,6 +48,13 @@ pub mod beacon_flags {
     pub const SAMPLES_SHIFT: u32 = 8;
     /// Mask of the sample count after shifting by [`SAMPLES_SHIFT`].
     pub const SAMPLES_MASK: u32 = 0xFF;
+    /// How far a valid position that is not [`EXTRAPOLATED`] may lie from its beacon,
+    /// micrometres: the sensing board's promise to the boards that read it (held by
+    /// `tests/tests/sensing.rs` over 3,360 places within the arm's reach, 2.3-2.7 mm at
+    /// most there; `sim-host bench sensing`'s survey, 2.6 mm at most). The C-space boards
+    /// grow every obstacle by it, so that the map holds the obstacle where it is, not only
+    /// where it was read.
+    pub const TOLERANCE_UM: i32 = 3_000;
 }
 
 /// Beacon assignment (thesis ch. II.3: 5 obstacles, robot tip, wand, instructional robot).
