@@ -21,11 +21,13 @@ use std::fmt::Write as _;
 
 /// Disk radii the families are built for, millimetres: a 2 mm pin (the thesis's point
 /// obstacles), quarter-inch steps to the thesis's 2-inch obstacles (25.4 mm + the polar
-/// margin), two larger ones that cover swept (moving) obstacles, and three for the disks
+/// margin) and on to 51 mm (32.5 and 45 since 2026-11-27: the C-space boards grow every
+/// obstacle by the sensing board's 3 mm tolerance, and a 2-inch one then needs the next
+/// family up), two larger ones that cover swept (moving) obstacles, and three for the disks
 /// that cover a reading beyond the calibrated square with its fold
 /// (`cspace::worklist::folded`: up to 150 mm for the campaign's 35 mm disks, swept).
-pub const FAMILY_RADII_MM: [f64; 11] = [
-    1.0, 6.5, 13.0, 19.5, 26.0, 38.5, 51.0, 76.5, 102.0, 153.0, 204.0,
+pub const FAMILY_RADII_MM: [f64; 13] = [
+    1.0, 6.5, 13.0, 19.5, 26.0, 32.5, 38.5, 45.0, 51.0, 76.5, 102.0, 153.0, 204.0,
 ];
 /// Where the generated tables live, from the workspace root.
 pub const TABLES_PATH: &str = "crates/cspace/src/tables.rs";
@@ -506,9 +508,13 @@ fn disk_span(cx: f64, cy: f64, e: f64, rho: f64, out: &mut Vec<(f64, f64)>) {
         return;
     }
     let k = (rho * rho + c * c - e * e) / (2.0 * rho * c);
-    if k > 1.0 {
+    // Tangent circles (rho = c + e) can round to k just above 1: they still meet, in one
+    // direction (the dense check in `check_half_width` finds that direction touching; it
+    // stopped the generator at 32.5 and 45 mm disks).
+    if k > 1.0 + 1e-9 {
         return;
     }
+    let k = k.min(1.0);
     if k <= -1.0 {
         out.push((0.0, PI));
         return;
