@@ -1099,8 +1099,8 @@ mod tests {
 
     /// The oracle does not depend on where theta1 = 0 lies: seed 1's sensed moving scene
     /// 121 (five disks circling, four of them in link 1's reach), turned by each of 64
-    /// angles, traps the arm when the two bands round it meet (3.87 s, by the bands' exact
-    /// edges sampled every 10 ms), the same time at every angle. Until 2026-11-27 a band
+    /// angles, traps the arm when the two bands round it meet (3.87 s, in the oracle's 0.5 ms
+    /// steps), the same time at every angle. Until 2026-11-27 a band
     /// merged across the seam was put first in the list, out of order, and the gap after
     /// the last band then ran round the whole circle: the scene as drawn (its bands meeting
     /// across the seam) was taken for survivable, and the reflex campaign counted its

@@ -24,8 +24,8 @@ use std::fmt::Write as _;
 /// margin) and on to 51 mm, halved between 13 and 38.5 mm (16.25, 22.75, 29.25, 32.5,
 /// 35.5 and 45 since 2026-11-27: the C-space boards grow every obstacle by the sensing
 /// board's 3 mm tolerance, and without them a disk is drawn up to 6.5 mm larger again, a
-/// 2-inch one up to 12.5), two larger ones that cover swept (moving) obstacles, and three for the disks
-/// that cover a reading beyond the calibrated square with its fold
+/// 2-inch one up to 12.5), two larger ones that cover swept (moving) obstacles, and three
+/// for the disks that cover a reading beyond the calibrated square with its fold
 /// (`cspace::worklist::folded`: up to 150 mm for the campaign's 35 mm disks, swept).
 pub const FAMILY_RADII_MM: [f64; 17] = [
     1.0, 6.5, 13.0, 16.25, 19.5, 22.75, 26.0, 29.25, 32.5, 35.5, 38.5, 45.0, 51.0, 76.5, 102.0,
