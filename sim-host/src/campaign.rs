@@ -1037,6 +1037,23 @@ mod tests {
         assert!(link1_band_half_rad(0.30, 0.035).is_some()); // past the end, within r
     }
 
+    /// A disk of radius `r_m` circling the shoulder `d_m` out, at bearing `a_rad` at t = 0,
+    /// once in `period_s` (negative: clockwise).
+    fn circling(a_rad: f64, d_m: f64, r_m: f64, period_s: f64) -> Obstacle {
+        Obstacle {
+            start: Disk {
+                x_m: d_m * a_rad.cos(),
+                y_m: d_m * a_rad.sin(),
+                r_m,
+            },
+            motion: Motion::Circle {
+                cx_m: 0.0,
+                cy_m: 0.0,
+                period_s,
+            },
+        }
+    }
+
     /// Two disks in link 1's reach circling the shoulder at different speeds: an arm
     /// starting in the gap the faster one closes is trapped when the bands meet (never
     /// before, and within 1.6 ms of the analytic time); one
@@ -1044,18 +1061,7 @@ mod tests {
     /// the second disk is out of link 1's reach.
     #[test]
     fn the_trap_oracle_finds_gaps_that_close_and_only_those() {
-        let disk = |a: f64, d: f64, w: f64| Obstacle {
-            start: Disk {
-                x_m: d * a.cos(),
-                y_m: d * a.sin(),
-                r_m: 0.02,
-            },
-            motion: Motion::Circle {
-                cx_m: 0.0,
-                cy_m: 0.0,
-                period_s: TAU / w,
-            },
-        };
+        let disk = |a: f64, d: f64, w: f64| circling(a, d, 0.02, TAU / w);
         // Disks at rest: trapped at once in a band, never outside one.
         let still = [Obstacle {
             motion: Motion::Static,
@@ -1141,26 +1147,10 @@ mod tests {
             ),
         ];
         let start = -2.71525200929503;
-        // When the arm's gap closes, from the bands' exact edges: the arm's gap is the one
-        // holding it at t = 0, followed as the bands turn.
         let turned = |by: f64| -> Vec<Obstacle> {
             scene
                 .iter()
-                .map(|&(x, y, r, period_s)| {
-                    let (d, a) = (x.hypot(y), y.atan2(x) + by);
-                    Obstacle {
-                        start: Disk {
-                            x_m: d * a.cos(),
-                            y_m: d * a.sin(),
-                            r_m: r,
-                        },
-                        motion: Motion::Circle {
-                            cx_m: 0.0,
-                            cy_m: 0.0,
-                            period_s,
-                        },
-                    }
-                })
+                .map(|&(x, y, r, period_s)| circling(y.atan2(x) + by, x.hypot(y), r, period_s))
                 .collect()
         };
         let t0 = link1_trapped_s(start, &turned(0.0), 4.0).expect("the arm's gap closes");
