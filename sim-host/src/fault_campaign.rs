@@ -28,8 +28,11 @@ pub struct FaultResult {
     pub scenario: String,
     /// Scenario title.
     pub name: String,
-    /// When the fault struck (s).
+    /// When the fault struck (s): when the scenario injects it, or for a bus error when its
+    /// board took it (the host posts it as a command the board takes at its next poll).
     pub fault_s: f64,
+    /// When the scenario injected the fault (s).
+    pub injected_s: f64,
     /// Separate contacts (must be 0).
     pub collisions: u64,
     /// Smallest clearance (m).
@@ -98,7 +101,18 @@ fn fault_time(sc: &Scenario) -> f64 {
 /// Runs one fault scenario (images from `images` when given).
 pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<FaultResult, String> {
     let mut sim = Sim::in_mode(sc.config.clone(), images).map_err(|e| e.to_string())?;
-    let fault_s = fault_time(sc);
+    let posted_s = fault_time(sc);
+    // A bus error is posted to its board as a host command, which the board takes at its
+    // next poll (after the job under way: an image's C-space job runs tens of
+    // milliseconds); the layer fails when it takes it, and the run is measured from there.
+    let taker = sc
+        .config
+        .faults
+        .iter()
+        .find(|f| f.kind == crate::sim::FaultKind::BusError && f.at_s == posted_s)
+        .map(|f| f.board);
+    let mut fault_s = posted_s;
+    let mut struck = taker.is_none();
     // The arm and the servo's last whole arrest point as the fault strikes (the fault may
     // tear the servo's record).
     let mut at_fault: Option<([f64; 2], [f64; 2], [f64; 2])> = None; // theta, arrest, speed
@@ -111,7 +125,16 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
         .status_word(&mut sim.bus())
         .faults();
     while !sim.done() {
-        if at_fault.is_none() && sim.t_s() + sim.cfg.dt_s > fault_s {
+        if !struck && sim.t_s() >= posted_s {
+            let b = taker.expect("only a bus error waits to be taken");
+            let st = BoardSlot::of(b).status_word(&mut sim.bus());
+            if st.fault() == Some(vme_map::FaultCode::BusError) {
+                struck = true;
+                fault_s = sim.t_s();
+                last_moving_s = fault_s;
+            }
+        }
+        if struck && at_fault.is_none() && sim.t_s() + sim.cfg.dt_s > fault_s {
             let l = &sim.plant.links;
             let w = [l[0].state.link_rad_s, l[1].state.link_rad_s];
             at_fault = last_servo.map(|a| (sim.plant.angles_rad(), a, w));
@@ -120,7 +143,7 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
         let l = &sim.plant.links;
         let w = [l[0].state.link_rad_s, l[1].state.link_rad_s];
         let t = sim.t_s();
-        if t > fault_s && w.iter().any(|v| v.abs() >= REST_RAD_S) {
+        if struck && t > fault_s && w.iter().any(|v| v.abs() >= REST_RAD_S) {
             last_moving_s = t;
         }
         if let Ok((s, seq)) = vme_map::SERVO_STATE.read(&mut sim.bus()) {
@@ -128,7 +151,7 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
                 last_servo = Some([s.arrest1_urad as f64 * 1e-6, s.arrest2_urad as f64 * 1e-6]);
             }
         }
-        if t > fault_s {
+        if struck && t > fault_s {
             let now = (t * crate::emu::CPU_HZ as f64) as u64;
             let braked = sim.servo_io.outputs(now).1.iter().all(|&b| b);
             let mut g = sim.bus();
@@ -151,6 +174,12 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
             }
             was_held = held;
         }
+    }
+    if !struck {
+        return Err(format!(
+            "{}: the bus error posted at {posted_s} s was never taken",
+            path.display()
+        ));
     }
     let (theta0, arrest, speed) =
         at_fault.ok_or("the servo published no state before the fault struck")?;
@@ -217,6 +246,7 @@ pub fn run_one(path: &Path, sc: &Scenario, images: Option<&Path>) -> Result<Faul
             .map_or(String::new(), |s| s.to_string_lossy().into_owned()),
         name: sc.name.clone(),
         fault_s,
+        injected_s: posted_s,
         collisions: sim.collisions.events,
         min_clearance_m: sim.collisions.min_clearance_m,
         speed_at_fault_rad_s: speed,
@@ -279,7 +309,15 @@ pub fn table(s: &Summary) -> String {
     for r in &s.results {
         t.push_str(&format!(
             "| {} | {} | {:.1} | {:.1}, {:.1} | {} | {} | {} | {} | {} |\n",
-            r.name.trim_start_matches("fault: "),
+            {
+                let name = r.name.trim_start_matches("fault: ");
+                let late_ms = (r.fault_s - r.injected_s) * 1e3;
+                if late_ms >= 0.5 {
+                    format!("{name} (taken {late_ms:.0} ms after it was posted)")
+                } else {
+                    name.to_string()
+                }
+            },
             r.collisions,
             r.min_clearance_m * 1e3,
             r.speed_at_fault_rad_s[0],
