@@ -776,3 +776,98 @@ fn every_published_window_is_free_in_the_map_among_moving_obstacles() {
     );
     eprintln!("{checked} published windows free in the map ({pixels} pixels, {vouched} vouched for without a read)");
 }
+
+/// The reflex's axis arithmetic (`prepare`, on the 68020 the runtime's `__reflex_prepare`)
+/// on the image against the host, word for word: arms anywhere within a few turns, at rest
+/// or up to 60 rad/s either way, arrest points ahead or behind, previous subgoals and goals
+/// near or far, latencies of 1-10 ms passes, margins as the window gives them; and a few
+/// extremes (speeds and angles whose products saturate nothing but fill the words). Also
+/// checks that the answers take every branch (the arrest point outside and inside the
+/// previous subgoal's span, either sign of speed, the rest speed's floor). Prints the
+/// image's cycles per axis.
+#[test]
+fn the_reflex_images_axes_match_the_host() {
+    use reflex::script::{scripted_prepare, PREPARE_IN_WORDS, PREPARE_OUT_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut rng = Rng::new(33);
+    let n = 600;
+    let mut asks: Vec<i32> = Vec::new();
+    for k in 0..n {
+        let mut r = |m: u64| (rng.next_u64() % m) as i64;
+        let mut ask = [0i32; PREPARE_IN_WORDS];
+        ask[0] = k % 2;
+        for a in 0..2 {
+            let theta = r(40_000_001) - 20_000_000;
+            let omega = match k % 5 {
+                0 => r(40_001) - 20_000, // at rest: below and about the rest speed
+                _ => r(120_000_001) - 60_000_000,
+            };
+            let arrest = theta + omega / 8 + r(400_001) - 200_000;
+            ask[1 + a] = theta as i32;
+            ask[3 + a] = omega as i32;
+            ask[5 + a] = arrest as i32;
+            // The previous subgoal near the arm, across the map, or just beyond the arrest
+            // point (the arm heading for it: the arrest point inside its span); its units
+            // within a few of the host's conversion (the reflex keeps them as it converted
+            // them).
+            let prev = match k % 3 {
+                0 => theta + r(4_000_001) - 2_000_000,
+                1 => theta + r(60_001) - 30_000,
+                _ => arrest + (arrest - theta).signum() * r(20_001),
+            };
+            ask[7 + a] = prev as i32;
+            ask[9 + a] = reflex::urad_to_u(prev as i32) + r(5) as i32 - 2;
+            ask[11 + a] = reflex::urad_to_u((theta + r(6_000_001) - 3_000_000) as i32);
+        }
+        let lat_us = 2 * (1000 + r(9001)) + 500;
+        ask[13] = (lat_us * 4295) as i32;
+        ask[14] = 64 + r(3000) as i32;
+        ask[15] = 64 + r(1500) as i32;
+        if k < 4 {
+            // Extremes: the fastest speeds and far angles either way.
+            let s = if k % 2 == 0 { 1 } else { -1 };
+            ask[1] = s * 2_000_000_000;
+            ask[3] = s * 2_000_000_000;
+            ask[5] = -s * 2_000_000_000;
+        }
+        asks.extend_from_slice(&ask);
+    }
+    let host =
+        host_each::<i32, PREPARE_IN_WORDS, PREPARE_OUT_WORDS>(&asks, |w, o| scripted_prepare(w, o));
+    let cycles = probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_prepare",
+        &asks,
+        PREPARE_IN_WORDS,
+        &host,
+        "axis",
+    );
+    // Every branch taken: the base span wider than the arrest point alone (outside) and
+    // not, speeds both ways, the stop time at the rest speed's floor and above it.
+    let outside = (0..n as usize)
+        .filter(|&i| {
+            let (w, o) = (&asks[i * PREPARE_IN_WORDS..], &host[i]);
+            let a = (w[0] & 1) as usize;
+            let arrest = reflex::urad_to_u(w[5 + a]);
+            let (theta, g) = (o[0], w[9 + a]);
+            let tol = reflex::MARGIN_U / 2;
+            arrest < theta.min(g) - tol || theta.max(g) + tol < arrest
+        })
+        .count();
+    let backward = (0..n as usize)
+        .filter(|&i| asks[i * PREPARE_IN_WORDS + 3 + (asks[i * PREPARE_IN_WORDS] & 1) as usize] < 0)
+        .count();
+    let floor = host.iter().map(|o| o[3]).min().unwrap();
+    let floored = host.iter().filter(|o| o[3] == floor).count();
+    assert!(
+        outside > 50 && outside < n as usize - 50 && backward > 50 && floored > 20 && floored < 300,
+        "{outside} outside, {backward} backward, {floored} at the stop time's floor"
+    );
+    let mean = cycles.iter().sum::<u64>() / cycles.len() as u64;
+    eprintln!(
+        "{n} axes: {mean} cycles an axis on average (probe call included), {} at most",
+        cycles.iter().max().unwrap()
+    );
+}

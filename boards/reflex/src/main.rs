@@ -142,3 +142,27 @@ fn safe_stop() {
     // SAFETY: called by the runtime on this board, where the private I/O is mapped.
     board_reflex::safe(&mut unsafe { MmioIo::new() });
 }
+
+/// Test probe (never called by the board): `n` axis questions
+/// (`reflex::script::PREPARE_IN_WORDS` words each) through the reflex's `prepare` (the
+/// runtime's `__reflex_prepare`); writes `reflex::script::PREPARE_OUT_WORDS` words per
+/// answer to `out`. The system tests compare it with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_prepare"]
+pub extern "C" fn reflex_probe_prepare(asks: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{PREPARE_IN_WORDS, PREPARE_OUT_WORDS};
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes PREPARE_IN_WORDS n input words and room for
+        // PREPARE_OUT_WORDS n outputs, word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(asks.add(PREPARE_IN_WORDS * i as usize) as *const [i32; PREPARE_IN_WORDS]),
+                &mut *(out.add(PREPARE_OUT_WORDS * i as usize) as *mut [i32; PREPARE_OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_prepare(w, o);
+        i += 1;
+    }
+    0
+}

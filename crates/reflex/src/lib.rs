@@ -174,8 +174,10 @@ const QUIET_AGE_US: [u32; 4] = {
 /// Bits of the published flags word (`ReflexSubgoal::flags`), defined with the record.
 pub use vme_map::records::reflex_flags as flags;
 
-/// The servo's published state, as the reflex uses it.
+/// The servo's published state, as the reflex uses it. `repr(C)`: the runtime's
+/// `__reflex_prepare` reads it (offsets asserted below [`Axis`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct ServoView {
     /// Absolute angles.
     pub theta_urad: [i32; 2],
@@ -1003,8 +1005,10 @@ impl Reflex {
     }
 }
 
-/// One axis of the window's arithmetic, angle units unless named otherwise.
-#[derive(Clone, Copy, Debug)]
+/// One axis of the window's arithmetic, angle units unless named otherwise. `repr(C)`:
+/// the runtime's `__reflex_prepare` writes it (offsets asserted below).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 struct Axis {
     theta: i32,
     goal: i32,
@@ -1026,7 +1030,9 @@ struct Axis {
 
 /// What every axis's spans are widened by, computed once for both axes: the latency, and
 /// in angle units the fixed margin with the one for obstacles moving during the latency and
-/// the one for moving obstacles' reaction time (0 when none moves).
+/// the one for moving obstacles' reaction time (0 when none moves). `repr(C)`:
+/// `__reflex_prepare` reads it.
+#[repr(C)]
 struct Margins {
     /// The latency in Q32 seconds.
     lat_q32: i32,
@@ -1036,10 +1042,111 @@ struct Margins {
     own: i32,
 }
 
+/// The constants `__reflex_prepare` takes from the Rust (one source for both): the
+/// conversion to angle units, the rest speed and the stop times of [`prepare`], the margin
+/// and the arrest slack's shift.
+#[repr(C)]
+struct PrepConst {
+    urad_to_u_q24: i32,
+    rest_u_s: i32,
+    stop_us_per_u_s_q24: [i32; 2],
+    margin_u: i32,
+    arrest_slack_shift: u32,
+}
+
+/// [`PrepConst`]'s values.
+#[cfg_attr(not(target_arch = "m68k"), allow(dead_code))]
+static PREP_CONST: PrepConst = PrepConst {
+    urad_to_u_q24: URAD_TO_U_Q24,
+    rest_u_s: REST_U_S,
+    stop_us_per_u_s_q24: STOP_US_PER_U_S_Q24,
+    margin_u: MARGIN_U,
+    arrest_slack_shift: ARREST_SLACK_SHIFT,
+};
+
+/// The layouts `__reflex_prepare` (crates/rt/asm/servo.S) uses.
+mod prep_layout {
+    use super::{Axis, Margins, PrepConst, ServoView};
+    use crate::window::Span;
+    use core::mem::{offset_of, size_of};
+    const _: () = assert!(offset_of!(ServoView, theta_urad) == 0);
+    const _: () = assert!(offset_of!(ServoView, omega_urad_s) == 8);
+    const _: () = assert!(offset_of!(ServoView, arrest_urad) == 16);
+    const _: () = assert!(offset_of!(Margins, lat_q32) == 0);
+    const _: () = assert!(offset_of!(Margins, base) == 4);
+    const _: () = assert!(offset_of!(Margins, own) == 8);
+    const _: () = assert!(offset_of!(PrepConst, urad_to_u_q24) == 0);
+    const _: () = assert!(offset_of!(PrepConst, rest_u_s) == 4);
+    const _: () = assert!(offset_of!(PrepConst, stop_us_per_u_s_q24) == 8);
+    const _: () = assert!(offset_of!(PrepConst, margin_u) == 16);
+    const _: () = assert!(offset_of!(PrepConst, arrest_slack_shift) == 20);
+    const _: () = assert!(offset_of!(Span, lo) == 0 && offset_of!(Span, hi) == 4);
+    const _: () = assert!(offset_of!(Axis, theta) == 0);
+    const _: () = assert!(offset_of!(Axis, goal) == 4);
+    const _: () = assert!(offset_of!(Axis, adv) == 8);
+    const _: () = assert!(offset_of!(Axis, stop_us) == 12);
+    const _: () = assert!(offset_of!(Axis, theta_urad) == 16);
+    const _: () = assert!(offset_of!(Axis, arrest_urad) == 20);
+    const _: () = assert!(offset_of!(Axis, prev_urad) == 24);
+    const _: () = assert!(offset_of!(Axis, omega_urad_s) == 28);
+    const _: () = assert!(offset_of!(Axis, base) == 32);
+    const _: () = assert!(offset_of!(Axis, core) == 40);
+    const _: () = assert!(offset_of!(Axis, own) == 48);
+    const _: () = assert!(offset_of!(Axis, rest) == 56);
+    const _: () = assert!(size_of::<Axis>() == 64);
+}
+
 /// Axis `i`'s state: its arithmetic, then its base rectangle, arrest region and own
-/// neighbourhood.
+/// neighbourhood. On the 68020 one call of `__reflex_prepare` (crates/rt/asm/servo.S),
+/// bit for bit [`prepare_host`] (`the_reflex_images_axes_match_the_host`): compiled, the
+/// two axes took ~3,200 cycles a pass with their product calls.
 #[inline(never)]
 fn prepare(
+    i: usize,
+    sv: &ServoView,
+    prev: &[i32; 2],
+    prev_u: &[i32; 2],
+    goal_u: &[i32; 2],
+    m: &Margins,
+) -> Axis {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __reflex_prepare(
+                i: u32,
+                sv: *const ServoView,
+                prev: *const [i32; 2],
+                prev_u: *const [i32; 2],
+                goal_u: *const [i32; 2],
+                m: *const Margins,
+                c: *const PrepConst,
+                out: *mut Axis,
+            );
+        }
+        let mut a = core::mem::MaybeUninit::<Axis>::uninit();
+        // SAFETY: the routine reads the inputs at the offsets `prep_layout` asserts and
+        // writes every field of `a`.
+        unsafe {
+            __reflex_prepare(
+                i as u32,
+                sv,
+                prev,
+                prev_u,
+                goal_u,
+                m,
+                &PREP_CONST,
+                a.as_mut_ptr(),
+            );
+            a.assume_init()
+        }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    prepare_host(i, sv, prev, prev_u, goal_u, m)
+}
+
+/// [`prepare`] in Rust: the host's, and the reference for the image's.
+#[cfg_attr(target_arch = "m68k", allow(dead_code))]
+fn prepare_host(
     i: usize,
     sv: &ServoView,
     prev: &[i32; 2],

@@ -265,3 +265,58 @@ pub fn scripted_known<G: vme_map::GlobalBus>(
     out[1] = tests as i32;
     out[2] = k.take_vouched() as i32;
 }
+
+/// Words of one axis question ([`scripted_prepare`]): the axis (0/1), the servo's angles,
+/// speeds and arrest points (two words each, urad and urad/s), the previous subgoal (2,
+/// urad), its and the goal's angle units (2 + 2), the margins (latency Q32 s, base and own
+/// margins in angle units).
+pub const PREPARE_IN_WORDS: usize = 16;
+/// Words of one axis answer: the axis's arithmetic in its layout's order (theta, goal,
+/// adv, stop_us, theta_urad, arrest_urad, prev_urad, omega_urad_s, then lo and hi of the
+/// base, core, own and rest spans).
+pub const PREPARE_OUT_WORDS: usize = 16;
+
+/// Answers one axis question (the reflex's `prepare`, on the 68020 `__reflex_prepare`) from
+/// the words `w`; writes `out`. For the image's probe `reflex_probe_prepare` and the
+/// system tests.
+#[inline(never)]
+pub fn scripted_prepare(w: &[i32; PREPARE_IN_WORDS], out: &mut [i32; PREPARE_OUT_WORDS]) {
+    let sv = ServoView {
+        theta_urad: [w[1], w[2]],
+        omega_urad_s: [w[3], w[4]],
+        arrest_urad: [w[5], w[6]],
+        t_us: 0,
+        loops: 0,
+    };
+    let m = crate::Margins {
+        lat_q32: w[13],
+        base: w[14],
+        own: w[15],
+    };
+    let a = crate::prepare(
+        (w[0] & 1) as usize,
+        &sv,
+        &[w[7], w[8]],
+        &[w[9], w[10]],
+        &[w[11], w[12]],
+        &m,
+    );
+    *out = [
+        a.theta,
+        a.goal,
+        a.adv,
+        a.stop_us,
+        a.theta_urad,
+        a.arrest_urad,
+        a.prev_urad,
+        a.omega_urad_s,
+        a.base.lo,
+        a.base.hi,
+        a.core.lo,
+        a.core.hi,
+        a.own.lo,
+        a.own.hi,
+        a.rest.lo,
+        a.rest.hi,
+    ];
+}

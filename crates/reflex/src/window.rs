@@ -224,8 +224,10 @@ impl Map for SliceMap<'_> {
     }
 }
 
-/// An inclusive range of unwrapped pixel indices along one axis.
+/// An inclusive range of unwrapped pixel indices along one axis. `repr(C)`: the runtime's
+/// `__reflex_prepare` writes spans.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct Span {
     /// First pixel.
     pub lo: i32,

@@ -228,6 +228,179 @@ __fx_mul_floor_shr24:
     move.l  %d1, %d0
     rts
 
+/* ---- the reflex's axis arithmetic (crates/reflex/src/lib.rs, `prepare`; here beside the
+ * MULSHR macro it uses) ----
+ * void __reflex_prepare(u32 i, const ServoView *sv, const i32 prev[2], const i32 prev_u[2],
+ *                       const i32 goal_u[2], const Margins *m, const PrepConst *c, Axis *out):
+ * axis i's Axis, bit for bit `reflex::prepare_host` (the Rust asserts every offset used
+ * here). The Rust's sign masks are branches on the N flag of the same wrapped difference
+ * (BMI / BPL, never BLT: a - b that overflows decides as the Rust's (a - b) >> 31 does), its
+ * absolute values a NEG (the same for every value). urad_to_u is fx::mul_floor_shr24 with
+ * c->urad_to_u_q24 (MULS.L, the 64-bit product's bits 24-55).
+ * ServoView: theta_urad[2] 0, omega_urad_s[2] 8, arrest_urad[2] 16. Margins: lat_q32 0,
+ * base 4, own 8. PrepConst: urad_to_u_q24 0, rest_u_s 4, stop_us_per_u_s_q24[2] 8,
+ * margin_u 16, arrest_slack_shift 20. Axis: theta 0, goal 4, adv 8, stop_us 12,
+ * theta_urad 16, arrest_urad 20, prev_urad 24, omega_urad_s 28, then the spans (lo, hi)
+ * base 32, core 40, own 48, rest 56. */
+.macro U_OF_URAD r, h
+    muls.l  (%a5), \h:\r
+    lsl.l   #8, \h
+    rol.l   #8, \r
+    move.b  \r, \h              /* h = floor(r K / 2^24) */
+.endm
+    .section .text.__reflex_prepare, "ax"
+    .globl __reflex_prepare
+__reflex_prepare:
+    movem.l %d2-%d7/%a2-%a5, -(%sp) /* 40 bytes: arguments from 44(%sp) */
+    move.l  44(%sp), %d7
+    lsl.l   #2, %d7                 /* i * 4 */
+    movea.l 48(%sp), %a0            /* sv */
+    movea.l 68(%sp), %a5            /* c */
+    movea.l 72(%sp), %a4            /* out */
+    /* w = |urad_to_u(omega)|, reach = mul_shr(w, lat_q32, 32) + 1, adv = 2 reach */
+    move.l  8(%a0,%d7.l), %d0
+    move.l  %d0, 28(%a4)            /* omega_urad_s */
+    moveq   #31, %d5
+    move.l  %d0, %d1
+    asr.l   %d5, %d1
+    move.l  %d1, %d5                /* back = omega >> 31 */
+    U_OF_URAD %d0, %d2
+    tst.l   %d2
+    bpl.s   1f
+    neg.l   %d2                     /* w */
+1:  movea.l 64(%sp), %a1            /* m */
+    move.l  %d2, %d0
+    muls.l  (%a1), %d3:%d0          /* w lat_q32 */
+    tst.l   %d0
+    bpl.s   2f
+    addq.l  #1, %d3                 /* rounded: + 2^31 */
+2:  addq.l  #1, %d3                 /* reach */
+    move.l  %d3, %d4
+    add.l   %d4, %d4                /* adv */
+    move.l  %d4, 8(%a4)
+    /* theta and the arrest point in angle units */
+    move.l  0(%a0,%d7.l), %d0
+    move.l  %d0, 16(%a4)            /* theta_urad */
+    U_OF_URAD %d0, %d6              /* theta */
+    move.l  %d6, 0(%a4)
+    move.l  16(%a0,%d7.l), %d0
+    move.l  %d0, 20(%a4)            /* arrest_urad */
+    U_OF_URAD %d0, %d1              /* arrest */
+    movea.l 52(%sp), %a1
+    move.l  0(%a1,%d7.l), 24(%a4)   /* prev_urad = prev[i] */
+    movea.l 60(%sp), %a1
+    move.l  0(%a1,%d7.l), 4(%a4)    /* goal = goal_u[i] */
+    movea.l 56(%sp), %a1
+    movea.l 0(%a1,%d7.l), %a2       /* g_prev = prev_u[i] */
+    move.l  8(%a5,%d7.l), %d7       /* stop_us_per_u_s_q24[i] */
+    /* stop_us = mul_shr(max(w, rest_u_s), stop, 24) */
+    move.l  %d2, %d0
+    sub.l   4(%a5), %d0
+    bpl.s   3f
+    move.l  4(%a5), %d0             /* w < rest: rest */
+    bra.s   4f
+3:  move.l  %d2, %d0
+4:  MULSHR  %d0, %d7, 24, %d2, %a3
+    move.l  %d0, 12(%a4)            /* stop_us */
+    /* a_end = arrest + (adv + (|arrest - theta| >> shift)) signed as the speed */
+    move.l  %d1, %d0
+    sub.l   %d6, %d0
+    bpl.s   5f
+    neg.l   %d0
+5:  move.l  20(%a5), %d7
+    asr.l   %d7, %d0                /* slack */
+    add.l   %d4, %d0                /* ahead */
+    eor.l   %d5, %d0
+    sub.l   %d5, %d0
+    add.l   %d1, %d0                /* a_end */
+    /* lo = min(theta, a_end) in d7, hi = max in d0 */
+    move.l  %d6, %d7
+    sub.l   %d0, %d7
+    bmi.s   6f
+    move.l  %d0, %d7                /* theta >= a_end: lo = a_end */
+    move.l  %d6, %d0                /* hi = theta */
+    bra.s   7f
+6:  move.l  %d6, %d7                /* lo = theta, hi = a_end */
+7:  move.l  16(%a5), %d2            /* margin */
+    move.l  %d7, %d4
+    sub.l   %d2, %d4
+    asr.l   #8, %d4
+    move.l  %d4, 40(%a4)            /* core.lo */
+    move.l  %d0, %d4
+    add.l   %d2, %d4
+    asr.l   #8, %d4
+    move.l  %d4, 44(%a4)            /* core.hi */
+    movea.l %d7, %a0                /* lo (sv no longer needed) */
+    movea.l %d0, %a3                /* hi */
+    /* glo = min(theta, g_prev) in d2, ghi = max in d4 */
+    move.l  %a2, %d4
+    move.l  %d6, %d2
+    sub.l   %d4, %d2
+    bmi.s   8f
+    move.l  %d4, %d2                /* theta >= g: glo = g */
+    move.l  %d6, %d4                /* ghi = theta */
+    bra.s   9f
+8:  move.l  %d6, %d2                /* glo = theta, ghi = g */
+9:  /* outside: arrest < glo - tol or ghi + tol < arrest (tol = margin >> 1) */
+    move.l  16(%a5), %d0
+    asr.l   #1, %d0                 /* tol */
+    move.l  %d1, %d7
+    sub.l   %d2, %d7
+    add.l   %d0, %d7                /* arrest - (glo - tol) */
+    add.l   %d4, %d0
+    sub.l   %d1, %d0                /* (ghi + tol) - arrest */
+    or.l    %d0, %d7
+    bmi.s   10f
+    move.l  %d1, %d0                /* inside: the arrest point both ways */
+    move.l  %d1, %d7
+    bra.s   11f
+10: move.l  %a0, %d0                /* outside: lo, hi */
+    move.l  %a3, %d7
+11: move.l  %d2, %d1                /* blo = min(glo, d0) in d2 */
+    sub.l   %d0, %d1
+    bmi.s   12f
+    move.l  %d0, %d2
+12: move.l  %d4, %d1                /* bhi = max(ghi, d7) in d4 */
+    sub.l   %d7, %d1
+    bpl.s   13f
+    move.l  %d7, %d4
+13: movea.l 64(%sp), %a1            /* m */
+    move.l  4(%a1), %d1             /* base margin */
+    move.l  %d2, %d0
+    sub.l   %d1, %d0
+    asr.l   #8, %d0
+    move.l  %d0, 32(%a4)            /* base.lo */
+    move.l  %d4, %d0
+    add.l   %d1, %d0
+    asr.l   #8, %d0
+    move.l  %d0, 36(%a4)            /* base.hi */
+    move.l  %d6, %d0
+    sub.l   %d1, %d0
+    asr.l   #8, %d0
+    move.l  %d0, 56(%a4)            /* rest.lo */
+    move.l  %d6, %d0
+    add.l   %d1, %d0
+    asr.l   #8, %d0
+    move.l  %d0, 60(%a4)            /* rest.hi */
+    move.l  8(%a1), %d1             /* own margin */
+    move.l  %d5, %d0
+    and.l   %d3, %d0                /* bwd = reach & back */
+    move.l  %d6, %d2
+    sub.l   %d0, %d2
+    sub.l   %d1, %d2
+    asr.l   #8, %d2
+    move.l  %d2, 48(%a4)            /* own.lo */
+    move.l  %d5, %d0
+    not.l   %d0
+    and.l   %d3, %d0                /* fwd = reach & !back */
+    move.l  %d6, %d2
+    add.l   %d0, %d2
+    add.l   %d1, %d2
+    asr.l   #8, %d2
+    move.l  %d2, 52(%a4)            /* own.hi */
+    movem.l (%sp)+, %d2-%d7/%a2-%a5
+    rts
+
 /* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
