@@ -833,8 +833,7 @@ fn the_reflex_images_axes_match_the_host() {
         }
         asks.extend_from_slice(&ask);
     }
-    let host =
-        host_each::<i32, PREPARE_IN_WORDS, PREPARE_OUT_WORDS>(&asks, |w, o| scripted_prepare(w, o));
+    let host = host_each::<i32, PREPARE_IN_WORDS, PREPARE_OUT_WORDS>(&asks, scripted_prepare);
     let cycles = probe_each(
         &img,
         &mut global,
