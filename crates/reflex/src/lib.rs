@@ -1099,8 +1099,9 @@ mod prep_layout {
 /// Axis `i`'s state: its arithmetic, then its base rectangle, arrest region and own
 /// neighbourhood. On the 68020 one call of `__reflex_prepare` (crates/rt/asm/servo.S),
 /// bit for bit [`prepare_host`] (`the_reflex_images_axes_match_the_host`): compiled, the
-/// two axes took ~3,200 cycles a pass with their product calls.
-#[inline(never)]
+/// two axes took ~3,200 cycles a pass with their product calls. Inlined: the routine
+/// writes the caller's axis in place (a call of its own copied each axis once more).
+#[inline(always)]
 fn prepare(
     i: usize,
     sv: &ServoView,
