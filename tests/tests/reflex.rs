@@ -870,3 +870,81 @@ fn the_reflex_images_axes_match_the_host() {
         cycles.iter().max().unwrap()
     );
 }
+
+/// The stall clock (`reflex::stall_flags`, on the 68020 the runtime's `__reflex_stall`) on
+/// the image against the host, word for word: the arm at or near the goal or far from it,
+/// at rest or moving about the rest speed, the subgoal at the goal, kept or moved about a
+/// quarter pixel from the clock's, the clock's time just before, about and long before the
+/// stall limit and wrapping round. Also checks that every flag is set and cleared and the
+/// clock both kept and restarted. Prints the image's cycles per answer.
+#[test]
+fn the_reflex_images_stall_clocks_match_the_host() {
+    use reflex::script::{scripted_stall, STALL_IN_WORDS, STALL_OUT_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut rng = Rng::new(44);
+    let n = 800;
+    let mut asks: Vec<i32> = Vec::new();
+    for k in 0..n {
+        let mut r = |m: u64| (rng.next_u64() % m) as i32;
+        let mut ask = [0i32; STALL_IN_WORDS];
+        for a in 0..2 {
+            let goal = r(12_000_001) - 6_000_000;
+            let theta = goal
+                + match k % 3 {
+                    0 => r(3_201) - 1_600,
+                    1 => r(8_001) - 4_000,
+                    _ => r(2_000_001) - 1_000_000,
+                };
+            ask[a] = theta;
+            ask[2 + a] = if k % 2 == 0 {
+                r(100_001) - 50_000
+            } else {
+                r(20_000_001) - 10_000_000
+            };
+            ask[4 + a] = goal;
+            ask[6 + a] = if k % 5 == 0 {
+                goal
+            } else {
+                theta + r(4_001) - 2_000
+            };
+            ask[8 + a] = ask[6 + a] + r(2_001) - 1_000;
+        }
+        let now = r(i32::MAX as u64);
+        ask[10] = match k % 4 {
+            0 => now - r(400_000),
+            1 => now - 199_000 - r(2_000),
+            2 => now + r(1_000_000),
+            _ => now - r(i32::MAX as u64),
+        };
+        ask[11] = now;
+        asks.extend_from_slice(&ask);
+    }
+    let host = host_each::<i32, STALL_IN_WORDS, STALL_OUT_WORDS>(&asks, scripted_stall);
+    let cycles = probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_stall",
+        &asks,
+        STALL_IN_WORDS,
+        &host,
+        "stall",
+    );
+    use vme_map::records::reflex_flags as rf;
+    for bit in [rf::AT_GOAL, rf::ARRIVED, rf::STALLED] {
+        let set = host.iter().filter(|o| o[0] as u32 & bit != 0).count();
+        assert!(
+            set > 20 && set < n - 20,
+            "flag {bit:#x} set in {set} of {n}"
+        );
+    }
+    let restarted = (0..n)
+        .filter(|&i| host[i][3] == asks[i * STALL_IN_WORDS + 11])
+        .count();
+    assert!(
+        restarted > 50 && restarted < n - 50,
+        "{restarted} restarted of {n}"
+    );
+    let mean = cycles.iter().sum::<u64>() / cycles.len() as u64;
+    eprintln!("{n} stall answers: {mean} cycles an answer on average (probe call included)");
+}

@@ -166,3 +166,27 @@ pub extern "C" fn reflex_probe_prepare(asks: *const i32, n: u32, out: *mut i32) 
     }
     0
 }
+
+/// Test probe (never called by the board): `n` stall questions
+/// (`reflex::script::STALL_IN_WORDS` words each) through `reflex::stall_flags` (the
+/// runtime's `__reflex_stall`); writes `reflex::script::STALL_OUT_WORDS` words per answer
+/// to `out`. The system tests compare it with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_stall"]
+pub extern "C" fn reflex_probe_stall(asks: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{STALL_IN_WORDS, STALL_OUT_WORDS};
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes STALL_IN_WORDS n input words and room for
+        // STALL_OUT_WORDS n outputs, word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(asks.add(STALL_IN_WORDS * i as usize) as *const [i32; STALL_IN_WORDS]),
+                &mut *(out.add(STALL_OUT_WORDS * i as usize) as *mut [i32; STALL_OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_stall(w, o);
+        i += 1;
+    }
+    0
+}

@@ -444,8 +444,8 @@ pub struct Reflex {
     healthy_once: bool,
     planner_cycle: Option<u32>,
     planner_since_us: u32,
-    stall_ref: [i32; 2],
-    stall_since_us: u32,
+    /// The stall clock ([`stall_flags`]).
+    stall: StallClock,
     /// Since when the arm has rested braking on an obstacle in its base rectangle, pass
     /// after pass (the clock for [`FROZEN_US`] that the goal's changes do not restart), and
     /// the pass that last did: any other pass in between (moving, clear, a hold) restarts it.
@@ -517,8 +517,10 @@ impl Reflex {
             healthy_once: false,
             planner_cycle: None,
             planner_since_us: 0,
-            stall_ref: [0; 2],
-            stall_since_us: 0,
+            stall: StallClock {
+                ref_urad: [0; 2],
+                since_us: 0,
+            },
             braked_since_us: 0,
             braked_pass: 0,
             pass: 0,
@@ -577,8 +579,10 @@ impl Reflex {
             self.last_loops = sv.loops;
             self.last = Some(sv.arrest_urad);
             self.hold_at = sv.arrest_urad;
-            self.stall_ref = sv.arrest_urad;
-            self.stall_since_us = sv.t_us;
+            self.stall = StallClock {
+                ref_urad: sv.arrest_urad,
+                since_us: sv.t_us,
+            };
         }
         if sv.loops == self.last_loops && !first {
             self.same_loops += 1;
@@ -831,7 +835,7 @@ impl Reflex {
                     self.now_us.wrapping_sub(since).min(1 << 30) as i32,
                 )
             };
-            let frozen = at_rest && (older(self.stall_since_us) | older(self.braked_since_us)) != 0;
+            let frozen = at_rest && (older(self.stall.since_us) | older(self.braked_since_us)) != 0;
             let k = &mut self.known;
             let near = !window::rect_free_known(map, k, a1.own, a2.own, &mut tests)
                 || (frozen && !window::rect_free_known(map, k, a1.rest, a2.rest, &mut tests));
@@ -899,7 +903,7 @@ impl Reflex {
         if out.flags & flags::ESCAPING == 0 {
             self.escape_to = None;
         }
-        out.flags |= self.stall(sv, &goal_urad, &sub);
+        out.flags |= stall_flags(sv, &goal_urad, &sub, &mut self.stall, self.now_us);
         out.tests = tests;
         out.known = self.known.take_vouched();
         self.last = Some(sub);
@@ -975,34 +979,121 @@ impl Reflex {
         self.escape_to = p.map(|p| p.target_px);
         p.map(|p| p.step_px)
     }
+}
 
-    /// The stall, at-goal and arrived flags for subgoal `sub`: at rest, short of the goal,
-    /// the subgoal stuck for [`STALL_US`] is a stall. Masks (-1 = yes), not booleans
-    /// (docs/toolchain.md).
-    #[inline(never)]
-    fn stall(&mut self, sv: &ServoView, goal_urad: &[i32; 2], sub: &[i32; 2]) -> u32 {
-        let quarter = QUARTER_PX_URAD;
-        let d = |a: i32, b: i32| (a - b) | (b - a);
-        // (a - b) | (b - a) is negative exactly when a != b.
-        let off_goal = d(sub[0], goal_urad[0]) | d(sub[1], goal_urad[1]);
-        let moving = masks::lt(REST_URAD_S - 1, masks::abs(sv.omega_urad_s[0]))
-            | masks::lt(REST_URAD_S - 1, masks::abs(sv.omega_urad_s[1]));
-        let far = masks::lt(AT_GOAL_URAD, masks::abs(sv.theta_urad[0] - goal_urad[0]))
-            | masks::lt(AT_GOAL_URAD, masks::abs(sv.theta_urad[1] - goal_urad[1]));
-        let moved = masks::lt(quarter, masks::abs(sub[0] - self.stall_ref[0]))
-            | masks::lt(quarter, masks::abs(sub[1] - self.stall_ref[1]));
-        let at_goal = masks::nonneg(off_goal);
-        let mut f = flags::AT_GOAL & at_goal as u32;
-        f |= flags::ARRIVED & !(moving | far) as u32;
-        let reset = moved | at_goal | moving;
-        let stuck_for = self.now_us.wrapping_sub(self.stall_since_us).min(1 << 30) as i32;
-        f |= flags::STALLED & (!reset & masks::lt(STALL_US as i32, stuck_for)) as u32;
-        self.stall_ref[0] = masks::pick(reset, sub[0], self.stall_ref[0]);
-        self.stall_ref[1] = masks::pick(reset, sub[1], self.stall_ref[1]);
-        self.stall_since_us =
-            masks::pick(reset, self.now_us as i32, self.stall_since_us as i32) as u32;
-        f
+/// The stall clock: the subgoal the arm was last seen to move toward, and since when.
+/// `repr(C)`: the runtime's `__reflex_stall` updates it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
+pub struct StallClock {
+    /// The subgoal when the clock last restarted, urad.
+    pub ref_urad: [i32; 2],
+    /// When it last restarted (the servo's clock, us).
+    pub since_us: u32,
+}
+
+/// The constants and flag bits `__reflex_stall` takes from the Rust (one source for both).
+#[repr(C)]
+struct StallConst {
+    quarter_urad: i32,
+    rest_urad_s: i32,
+    at_goal_urad: i32,
+    stall_us: u32,
+    at_goal: u32,
+    arrived: u32,
+    stalled: u32,
+}
+
+/// [`StallConst`]'s values.
+#[cfg_attr(not(target_arch = "m68k"), allow(dead_code))]
+static STALL_CONST: StallConst = StallConst {
+    quarter_urad: QUARTER_PX_URAD,
+    rest_urad_s: REST_URAD_S,
+    at_goal_urad: AT_GOAL_URAD,
+    stall_us: STALL_US,
+    at_goal: flags::AT_GOAL,
+    arrived: flags::ARRIVED,
+    stalled: flags::STALLED,
+};
+
+/// The layouts `__reflex_stall` (crates/rt/asm/servo.S) uses.
+mod stall_layout {
+    use super::{StallClock, StallConst};
+    use core::mem::offset_of;
+    const _: () = assert!(offset_of!(StallClock, ref_urad) == 0);
+    const _: () = assert!(offset_of!(StallClock, since_us) == 8);
+    const _: () = assert!(offset_of!(StallConst, quarter_urad) == 0);
+    const _: () = assert!(offset_of!(StallConst, rest_urad_s) == 4);
+    const _: () = assert!(offset_of!(StallConst, at_goal_urad) == 8);
+    const _: () = assert!(offset_of!(StallConst, stall_us) == 12);
+    const _: () = assert!(offset_of!(StallConst, at_goal) == 16);
+    const _: () = assert!(offset_of!(StallConst, arrived) == 20);
+    const _: () = assert!(offset_of!(StallConst, stalled) == 24);
+}
+
+/// The stall, at-goal and arrived flags for subgoal `sub` at the servo's time `now_us`,
+/// with the stall clock `clk`: at rest, short of the goal, the subgoal stuck for
+/// [`STALL_US`] is a stall. On the 68020 one call of `__reflex_stall` (crates/rt/asm/servo.S),
+/// bit for bit [`stall_flags_host`] (`the_reflex_images_stall_clocks_match_the_host`;
+/// compiled, ~740 cycles a pass).
+#[inline(always)]
+pub fn stall_flags(
+    sv: &ServoView,
+    goal_urad: &[i32; 2],
+    sub: &[i32; 2],
+    clk: &mut StallClock,
+    now_us: u32,
+) -> u32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __reflex_stall(
+                sv: *const ServoView,
+                goal: *const [i32; 2],
+                sub: *const [i32; 2],
+                clk: *mut StallClock,
+                now_us: u32,
+                c: *const StallConst,
+            ) -> u32;
+        }
+        // SAFETY: the routine reads the inputs at the offsets asserted in `prep_layout`
+        // and `stall_layout`, and writes `clk` only.
+        unsafe { __reflex_stall(sv, goal_urad, sub, clk, now_us, &STALL_CONST) }
     }
+    #[cfg(not(target_arch = "m68k"))]
+    stall_flags_host(sv, goal_urad, sub, clk, now_us)
+}
+
+/// [`stall_flags`] in Rust (the host's, and the reference for the image's). Masks (-1 =
+/// yes), not booleans (docs/toolchain.md).
+#[cfg_attr(target_arch = "m68k", allow(dead_code))]
+fn stall_flags_host(
+    sv: &ServoView,
+    goal_urad: &[i32; 2],
+    sub: &[i32; 2],
+    clk: &mut StallClock,
+    now_us: u32,
+) -> u32 {
+    let quarter = QUARTER_PX_URAD;
+    let d = |a: i32, b: i32| (a - b) | (b - a);
+    // (a - b) | (b - a) is negative exactly when a != b.
+    let off_goal = d(sub[0], goal_urad[0]) | d(sub[1], goal_urad[1]);
+    let moving = masks::lt(REST_URAD_S - 1, masks::abs(sv.omega_urad_s[0]))
+        | masks::lt(REST_URAD_S - 1, masks::abs(sv.omega_urad_s[1]));
+    let far = masks::lt(AT_GOAL_URAD, masks::abs(sv.theta_urad[0] - goal_urad[0]))
+        | masks::lt(AT_GOAL_URAD, masks::abs(sv.theta_urad[1] - goal_urad[1]));
+    let moved = masks::lt(quarter, masks::abs(sub[0] - clk.ref_urad[0]))
+        | masks::lt(quarter, masks::abs(sub[1] - clk.ref_urad[1]));
+    let at_goal = masks::nonneg(off_goal);
+    let mut f = flags::AT_GOAL & at_goal as u32;
+    f |= flags::ARRIVED & !(moving | far) as u32;
+    let reset = moved | at_goal | moving;
+    let stuck_for = now_us.wrapping_sub(clk.since_us).min(1 << 30) as i32;
+    f |= flags::STALLED & (!reset & masks::lt(STALL_US as i32, stuck_for)) as u32;
+    clk.ref_urad[0] = masks::pick(reset, sub[0], clk.ref_urad[0]);
+    clk.ref_urad[1] = masks::pick(reset, sub[1], clk.ref_urad[1]);
+    clk.since_us = masks::pick(reset, now_us as i32, clk.since_us as i32) as u32;
+    f
 }
 
 /// One axis of the window's arithmetic, angle units unless named otherwise. `repr(C)`:

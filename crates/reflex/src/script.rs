@@ -320,3 +320,36 @@ pub fn scripted_prepare(w: &[i32; PREPARE_IN_WORDS], out: &mut [i32; PREPARE_OUT
         a.rest.hi,
     ];
 }
+
+/// Words of one stall question ([`scripted_stall`]): the servo's angles and speeds (2 + 2,
+/// urad and urad/s), the goal and the subgoal (2 + 2, urad), the stall clock (its subgoal,
+/// 2, and its time), the time now (us).
+pub const STALL_IN_WORDS: usize = 12;
+/// Words of one stall answer: the flags, then the stall clock after the pass (its subgoal,
+/// 2, and its time).
+pub const STALL_OUT_WORDS: usize = 4;
+
+/// Answers one stall question (`reflex::stall_flags`, on the 68020 `__reflex_stall`) from
+/// the words `w`; writes `out`. For the image's probe `reflex_probe_stall` and the system
+/// tests.
+#[inline(never)]
+pub fn scripted_stall(w: &[i32; STALL_IN_WORDS], out: &mut [i32; STALL_OUT_WORDS]) {
+    let sv = ServoView {
+        theta_urad: [w[0], w[1]],
+        omega_urad_s: [w[2], w[3]],
+        arrest_urad: [0, 0],
+        t_us: 0,
+        loops: 0,
+    };
+    let mut clk = crate::StallClock {
+        ref_urad: [w[8], w[9]],
+        since_us: w[10] as u32,
+    };
+    let f = crate::stall_flags(&sv, &[w[4], w[5]], &[w[6], w[7]], &mut clk, w[11] as u32);
+    *out = [
+        f as i32,
+        clk.ref_urad[0],
+        clk.ref_urad[1],
+        clk.since_us as i32,
+    ];
+}

@@ -401,6 +401,106 @@ __reflex_prepare:
     movem.l (%sp)+, %d2-%d7/%a2-%a5
     rts
 
+/* u32 __reflex_stall(const ServoView *sv, const i32 goal[2], const i32 sub[2],
+ *                    StallClock *clk, u32 now_us, const StallConst *c):
+ * reflex::stall_flags, bit for bit `stall_flags_host` (crates/reflex/src/lib.rs asserts the
+ * offsets): the at-goal, arrived and stalled flags, and the stall clock restarted (ref =
+ * sub, since = now) when the subgoal moved, reached the goal or the arm moves. Each of the
+ * Rust's sign masks is the sign of the same wrapped difference here, ORed before one
+ * branch. StallClock: ref_urad[2] 0, since_us 8. StallConst: quarter_urad 0, rest_urad_s 4,
+ * at_goal_urad 8, stall_us 12, the flags AT_GOAL 16, ARRIVED 20, STALLED 24. */
+    .section .text.__reflex_stall, "ax"
+    .globl __reflex_stall
+__reflex_stall:
+    movem.l %d2-%d5/%a2-%a4, -(%sp) /* 28 bytes: arguments from 32(%sp) */
+    movea.l 32(%sp), %a0            /* sv */
+    movea.l 36(%sp), %a1            /* goal */
+    movea.l 40(%sp), %a2            /* sub */
+    movea.l 44(%sp), %a3            /* clk */
+    movea.l 52(%sp), %a4            /* c */
+    /* off the goal: (sub - goal) | (goal - sub) of both, sign in d2 */
+    move.l  (%a2), %d2
+    sub.l   (%a1), %d2
+    move.l  (%a1), %d0
+    sub.l   (%a2), %d0
+    or.l    %d0, %d2
+    move.l  4(%a2), %d0
+    sub.l   4(%a1), %d0
+    or.l    %d0, %d2
+    move.l  4(%a1), %d0
+    sub.l   4(%a2), %d0
+    or.l    %d0, %d2
+    /* moving: rest - 1 - |omega| < 0 on either link, sign in d3 */
+    move.l  4(%a4), %d1
+    subq.l  #1, %d1
+    move.l  8(%a0), %d0
+    bpl.s   1f
+    neg.l   %d0
+1:  move.l  %d1, %d3
+    sub.l   %d0, %d3
+    move.l  12(%a0), %d0
+    bpl.s   2f
+    neg.l   %d0
+2:  sub.l   %d0, %d1
+    or.l    %d1, %d3
+    /* far: at_goal_urad - |theta - goal| < 0 on either, sign in d4 */
+    move.l  (%a0), %d0
+    sub.l   (%a1), %d0
+    bpl.s   3f
+    neg.l   %d0
+3:  move.l  8(%a4), %d4
+    sub.l   %d0, %d4
+    move.l  4(%a0), %d0
+    sub.l   4(%a1), %d0
+    bpl.s   4f
+    neg.l   %d0
+4:  move.l  8(%a4), %d1
+    sub.l   %d0, %d1
+    or.l    %d1, %d4
+    /* moved: quarter - |sub - ref| < 0 on either, sign in d5 */
+    move.l  (%a2), %d0
+    sub.l   (%a3), %d0
+    bpl.s   5f
+    neg.l   %d0
+5:  move.l  (%a4), %d5
+    sub.l   %d0, %d5
+    move.l  4(%a2), %d0
+    sub.l   4(%a3), %d0
+    bpl.s   6f
+    neg.l   %d0
+6:  move.l  (%a4), %d1
+    sub.l   %d0, %d1
+    or.l    %d1, %d5
+    /* the flags */
+    moveq   #0, %d0
+    tst.l   %d2
+    bmi.s   7f
+    or.l    16(%a4), %d0            /* at the goal */
+7:  move.l  %d3, %d1
+    or.l    %d4, %d1
+    bmi.s   8f
+    or.l    20(%a4), %d0            /* arrived: neither moving nor far */
+8:  move.l  %d2, %d1
+    not.l   %d1                     /* at the goal */
+    or.l    %d5, %d1                /* or moved */
+    or.l    %d3, %d1                /* or moving: the clock restarts */
+    bmi.s   10f
+    move.l  48(%sp), %d1
+    sub.l   8(%a3), %d1             /* now - since, wrapping */
+    cmpi.l  #0x40000000, %d1
+    bls.s   9f
+    move.l  #0x40000000, %d1        /* at most 2^30 (unsigned) */
+9:  move.l  12(%a4), %d2
+    sub.l   %d1, %d2                /* stall_us - stuck_for */
+    bpl.s   11f
+    or.l    24(%a4), %d0            /* stalled */
+    bra.s   11f
+10: move.l  (%a2), (%a3)
+    move.l  4(%a2), 4(%a3)
+    move.l  48(%sp), 8(%a3)
+11: movem.l (%sp)+, %d2-%d5/%a2-%a4
+    rts
+
 /* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
