@@ -948,3 +948,53 @@ fn the_reflex_images_stall_clocks_match_the_host() {
     let mean = cycles.iter().sum::<u64>() / cycles.len() as u64;
     eprintln!("{n} stall answers: {mean} cycles an answer on average (probe call included)");
 }
+
+/// The goal's clamp into the window (`reflex::clamp_into`, on the 68020 the runtime's
+/// `__reflex_clamp_into`) on the image against the host: goals inside, below and above
+/// spans of 1-40 pixels anywhere within a few turns, with keeps that leave the span room or
+/// not (then its middle). Also checks that each case occurs. Prints the image's cycles.
+#[test]
+fn the_reflex_images_goal_clamps_match_the_host() {
+    use reflex::script::{scripted_clamp, CLAMP_IN_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut rng = Rng::new(55);
+    let n = 800;
+    let mut asks: Vec<i32> = Vec::new();
+    let mut cases = [0usize; 4]; // inside, below, above, narrow
+    for _ in 0..n {
+        let mut r = |m: u64| (rng.next_u64() % m) as i32;
+        let lo = r(1_001) - 500;
+        let hi = lo + r(40);
+        let keep = 64 + r(3_000);
+        let goal_u = lo * 256 + r(((hi - lo + 1) * 256 + 4_000) as u64) - 2_000;
+        let goal_urad = reflex::u_to_urad(goal_u) + r(3) - 1;
+        let (l, h) = (lo * 256 + keep, (hi + 1) * 256 - 1 - keep);
+        cases[if h < l {
+            3
+        } else if goal_u < l {
+            1
+        } else if goal_u > h {
+            2
+        } else {
+            0
+        }] += 1;
+        asks.extend_from_slice(&[goal_urad, goal_u, lo, hi, keep]);
+    }
+    assert!(
+        cases.iter().all(|&c| c > 50),
+        "inside, below, above, narrow: {cases:?}"
+    );
+    let host = host_each::<i32, CLAMP_IN_WORDS, 1>(&asks, scripted_clamp);
+    let cycles = probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_clamp",
+        &asks,
+        CLAMP_IN_WORDS,
+        &host,
+        "clamp",
+    );
+    let mean = cycles.iter().sum::<u64>() / cycles.len() as u64;
+    eprintln!("{n} clamps: {mean} cycles a clamp on average (probe call included)");
+}

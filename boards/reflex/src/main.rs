@@ -190,3 +190,27 @@ pub extern "C" fn reflex_probe_stall(asks: *const i32, n: u32, out: *mut i32) ->
     }
     0
 }
+
+/// Test probe (never called by the board): `n` goal-clamp questions
+/// (`reflex::script::CLAMP_IN_WORDS` words each) through `reflex::clamp_into` (the
+/// runtime's `__reflex_clamp_into`); writes one word per answer to `out`. The system tests
+/// compare it with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_clamp"]
+pub extern "C" fn reflex_probe_clamp(asks: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::CLAMP_IN_WORDS;
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes CLAMP_IN_WORDS n input words and room for n outputs,
+        // word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(asks.add(CLAMP_IN_WORDS * i as usize) as *const [i32; CLAMP_IN_WORDS]),
+                &mut *(out.add(i as usize) as *mut [i32; 1]),
+            )
+        };
+        reflex::script::scripted_clamp(w, o);
+        i += 1;
+    }
+    0
+}

@@ -1337,9 +1337,34 @@ fn escape_step(th: i32, q: i32) -> i32 {
 
 /// The goal's component `goal_urad` (`goal_u` in angle units) if it lies at least `keep`
 /// inside the pixel span `s`, else the nearest point that does (the span's middle if it is
-/// too narrow for that).
-#[inline(never)]
-fn clamp_into(goal_urad: i32, goal_u: i32, s: Span, keep: i32) -> i32 {
+/// too narrow for that). On the 68020 one call of `__reflex_clamp_into`
+/// (crates/rt/asm/servo.S), bit for bit [`clamp_into_host`]
+/// (`the_reflex_images_goal_clamps_match_the_host`; compiled, ~280 cycles a call with its
+/// conversion).
+#[inline(always)]
+pub fn clamp_into(goal_urad: i32, goal_u: i32, s: Span, keep: i32) -> i32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __reflex_clamp_into(
+                goal_urad: i32,
+                goal_u: i32,
+                lo_px: i32,
+                hi_px: i32,
+                keep: i32,
+                u_to_urad_q16: i32,
+            ) -> i32;
+        }
+        // SAFETY: a pure function in the runtime's assembly.
+        unsafe { __reflex_clamp_into(goal_urad, goal_u, s.lo, s.hi, keep, U_TO_URAD_Q16) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    clamp_into_host(goal_urad, goal_u, s, keep)
+}
+
+/// [`clamp_into`] in Rust (the host's, and the reference for the image's).
+#[cfg_attr(target_arch = "m68k", allow(dead_code))]
+fn clamp_into_host(goal_urad: i32, goal_u: i32, s: Span, keep: i32) -> i32 {
     use masks::pick;
     let lo = s.lo * PIX_U + keep;
     let hi = (s.hi + 1) * PIX_U - 1 - keep;

@@ -353,3 +353,16 @@ pub fn scripted_stall(w: &[i32; STALL_IN_WORDS], out: &mut [i32; STALL_OUT_WORDS
         clk.since_us as i32,
     ];
 }
+
+/// Words of one goal-clamp question ([`scripted_clamp`]): the goal's component (urad) and
+/// its angle units, the span's first and last pixel, the distance to keep (angle units).
+pub const CLAMP_IN_WORDS: usize = 5;
+
+/// Answers one goal-clamp question (`reflex::clamp_into`, on the 68020
+/// `__reflex_clamp_into`) from the words `w` into `out[0]`. For the image's probe
+/// `reflex_probe_clamp` and the system tests.
+#[inline(never)]
+pub fn scripted_clamp(w: &[i32; CLAMP_IN_WORDS], out: &mut [i32; 1]) {
+    let s = crate::window::Span { lo: w[2], hi: w[3] };
+    out[0] = crate::clamp_into(w[0], w[1], s, w[4]);
+}

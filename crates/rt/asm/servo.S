@@ -501,6 +501,49 @@ __reflex_stall:
 11: movem.l (%sp)+, %d2-%d5/%a2-%a4
     rts
 
+/* i32 __reflex_clamp_into(i32 goal_urad, i32 goal_u, i32 lo_px, i32 hi_px, i32 keep,
+ *                         i32 u_to_urad_q16):
+ * reflex::clamp_into, bit for bit `clamp_into_host`: the goal if it lies keep inside the
+ * pixels lo_px ..= hi_px (256 angle units each), else the nearest point that does (the
+ * middle if the span is too narrow), converted to urad (fx::mul_shr(u, q16, 16)). The
+ * Rust's masks are the signs of the same wrapped differences, tested in its order. */
+    .section .text.__reflex_clamp_into, "ax"
+    .globl __reflex_clamp_into
+__reflex_clamp_into:
+    movem.l %d2-%d3, -(%sp)         /* 8 bytes: arguments from 12(%sp) */
+    move.l  20(%sp), %d1
+    lsl.l   #8, %d1
+    add.l   28(%sp), %d1            /* lo = lo_px 256 + keep */
+    move.l  24(%sp), %d2
+    addq.l  #1, %d2
+    lsl.l   #8, %d2
+    subq.l  #1, %d2
+    sub.l   28(%sp), %d2            /* hi = (hi_px + 1) 256 - 1 - keep */
+    move.l  16(%sp), %d0            /* goal_u */
+    move.l  %d2, %d3
+    sub.l   %d1, %d3
+    bmi.s   3f                      /* narrow: the middle */
+    move.l  %d0, %d3
+    sub.l   %d1, %d3
+    bmi.s   1f                      /* below: lo */
+    move.l  %d2, %d3
+    sub.l   %d0, %d3
+    bmi.s   2f                      /* above: hi */
+    move.l  12(%sp), %d0            /* inside: the goal as it is */
+    bra.s   9f
+1:  move.l  %d1, %d0
+    bra.s   4f
+2:  move.l  %d2, %d0
+    bra.s   4f
+3:  move.l  20(%sp), %d0
+    add.l   24(%sp), %d0
+    addq.l  #1, %d0
+    lsl.l   #8, %d0
+    asr.l   #1, %d0                 /* (lo_px + hi_px + 1) 256 / 2 */
+4:  MULSHR  %d0, 32(%sp), 16, %d1, %a0
+9:  movem.l (%sp)+, %d2-%d3
+    rts
+
 /* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
