@@ -998,3 +998,76 @@ fn the_reflex_images_goal_clamps_match_the_host() {
     let mean = cycles.iter().sum::<u64>() / cycles.len() as u64;
     eprintln!("{n} clamps: {mean} cycles a clamp on average (probe call included)");
 }
+
+/// The health monitor's entry readings (`reflex::health::Monitor::entry`, on the 68020 the
+/// runtime's `__reflex_health_entry`) on the image against the host, step for step on one
+/// monitor: entries read in turn and at random, claimed and free, their words changing or
+/// standing still for up to 40 ms, tracked, undrawn or neither, lagging by up to 30 mm, the
+/// clock wrapping once. Also checks that every verdict is set and cleared and the returned
+/// mask both ways. Prints the image's cycles per step.
+#[test]
+fn the_reflex_images_health_entries_match_the_host() {
+    use reflex::script::{scripted_health_entry, HEALTH_IN_WORDS, HEALTH_OUT_WORDS};
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let mut rng = Rng::new(66);
+    let n = 1500;
+    let mut asks: Vec<i32> = Vec::new();
+    let mut now = u32::MAX - 3_000_000; // wraps about a fifth of the way in
+    let mut words = [[0i32; 2]; 6];
+    let mut modes = [[1i32, 0, 0]; 6];
+    for k in 0..n {
+        let mut r = |m: u64| (rng.next_u64() % m) as i32;
+        now = now.wrapping_add(r(3_000) as u32);
+        let i = if k % 2 == 0 {
+            (k / 2) % 6
+        } else {
+            r(6) as usize
+        };
+        // Words change now and then, claims come and go.
+        if r(8) == 0 {
+            words[i][0] = if r(3) == 0 { 0 } else { 1 + r(3) };
+        }
+        if r(6) == 0 {
+            words[i][1] += 1;
+        }
+        // Drawn or not, and how far behind, for a while (lagging takes 100 ms of it).
+        if r(25) == 0 {
+            modes[i] = match r(6) {
+                0 => [0, 1, r(30_000)],
+                1 => [0, 0, r(30_000)],
+                2 | 3 => [1, 0, 15_000 + r(15_000)],
+                _ => [1, 0, r(15_001)],
+            };
+        }
+        let [tracked, undrawn, lag] = modes[i];
+        asks.extend_from_slice(&[
+            i as i32,
+            words[i][0],
+            words[i][1],
+            tracked,
+            undrawn,
+            lag,
+            now as i32,
+        ]);
+    }
+    let mut m = reflex::health::Monitor::new();
+    let host = host_each::<i32, HEALTH_IN_WORDS, HEALTH_OUT_WORDS>(&asks, |w, o| {
+        scripted_health_entry(&mut m, w, o)
+    });
+    let cycles = probe_each(
+        &img,
+        &mut global,
+        "reflex_probe_health",
+        &asks,
+        HEALTH_IN_WORDS,
+        &host,
+        "health entry",
+    );
+    for (k, what) in [(0, "returned"), (1, "torn"), (2, "lagging"), (3, "behind")] {
+        let set = host.iter().filter(|o| o[k] != 0).count();
+        assert!(set > 30 && set < n - 30, "{what} in {set} of {n} steps");
+    }
+    let mean = cycles.iter().sum::<u64>() / cycles.len() as u64;
+    eprintln!("{n} health steps: {mean} cycles a step on average (probe call included)");
+}

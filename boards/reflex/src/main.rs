@@ -214,3 +214,31 @@ pub extern "C" fn reflex_probe_clamp(asks: *const i32, n: u32, out: *mut i32) ->
     }
     0
 }
+
+/// Test probe (never called by the board): `n` steps of one health monitor's entry readings
+/// (`reflex::script::HEALTH_IN_WORDS` words each; one monitor kept from call to call) through
+/// `reflex::health::Monitor::entry` (the runtime's `__reflex_health_entry`); writes
+/// `reflex::script::HEALTH_OUT_WORDS` words per step to `out`. The system tests compare it
+/// with the host.
+#[no_mangle]
+#[link_section = ".text.probe.reflex_health"]
+pub extern "C" fn reflex_probe_health(steps: *const i32, n: u32, out: *mut i32) -> i32 {
+    use reflex::script::{HEALTH_IN_WORDS, HEALTH_OUT_WORDS};
+    static mut MONITOR: reflex::health::Monitor = reflex::health::Monitor::new();
+    // SAFETY: the probe is the only code that touches MONITOR.
+    let m = unsafe { &mut *core::ptr::addr_of_mut!(MONITOR) };
+    let mut i = 0;
+    while i < n {
+        // SAFETY: the caller passes HEALTH_IN_WORDS n input words and room for
+        // HEALTH_OUT_WORDS n outputs, word aligned.
+        let (w, o) = unsafe {
+            (
+                &*(steps.add(HEALTH_IN_WORDS * i as usize) as *const [i32; HEALTH_IN_WORDS]),
+                &mut *(out.add(HEALTH_OUT_WORDS * i as usize) as *mut [i32; HEALTH_OUT_WORDS]),
+            )
+        };
+        reflex::script::scripted_health_entry(m, w, o);
+        i += 1;
+    }
+    0
+}

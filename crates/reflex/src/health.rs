@@ -24,20 +24,22 @@ pub const OBJECTS_STALE_US: u32 = 30_000;
 /// (the arm holds meanwhile).
 pub const STARTUP_US: u32 = 500_000;
 
-/// The C-space work list as the reflex sees it, per entry.
+/// The C-space work list as the reflex sees it, per entry. `repr(C)`: the runtime's
+/// `__reflex_health_entry` reads it (offsets asserted in `entry_layout`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct EntryView {
     /// The entry's claim word (0 = free).
     pub claim: u32,
     /// The entry's state word (changes with every redraw).
     pub state: u32,
+    /// Largest axis distance between the drawn image's position and the sensed one.
+    pub lag_um: i32,
     /// Whether an image is drawn and its obstacle's beacon is valid.
     pub tracked: bool,
     /// The obstacle exists (its beacon is valid, or the host configured it) but no image is
     /// drawn.
     pub undrawn: bool,
-    /// Largest axis distance between the drawn image's position and the sensed one.
-    pub lag_um: i32,
 }
 
 impl EntryView {
@@ -82,8 +84,11 @@ pub enum Problem {
     ObjectsStale,
 }
 
-/// Tracks the inputs' freshness over passes.
+/// Tracks the inputs' freshness over passes. `repr(C)`: the runtime's
+/// `__reflex_health_entry` updates an entry's part of it (offsets asserted in
+/// `entry_layout`).
 #[derive(Clone, Copy, Debug, Default)]
+#[repr(C)]
 pub struct Monitor {
     hb: [u32; 3],
     hb_since_us: u32,
@@ -97,7 +102,6 @@ pub struct Monitor {
     states: [u32; ENTRIES],
     claimed_since_us: [u32; ENTRIES],
     lag_since_us: [u32; ENTRIES],
-    started: bool,
     /// A C-space heartbeat and the frame counter have been seen to change (-1): until then
     /// the map and the positions count as stale.
     hb_seen: i32,
@@ -109,6 +113,9 @@ pub struct Monitor {
     verdict: [u32; 3],
     /// Bit `i`: entry `i` has been read at least once.
     seen: u32,
+    /// Last, so that the words before it lie alike on the host and the 68020 (which aligns
+    /// words to 2 bytes).
+    started: bool,
 }
 
 impl Monitor {
@@ -225,9 +232,36 @@ impl Monitor {
 
     /// Takes entry `i`'s new reading `e` at `now_us`: its timers and verdict (torn, lagging,
     /// behind now: masks). Returns -1 when the entry is claimed and changed since its last
-    /// reading (a C-space board at work on it: its progress marks, `WorkEntry::claim`).
-    #[inline(never)]
-    fn entry(&mut self, i: usize, e: &EntryView, now_us: u32) -> i32 {
+    /// reading (a C-space board at work on it: its progress marks, `WorkEntry::claim`). On
+    /// the 68020 one call of `__reflex_health_entry` (crates/rt/asm/servo.S), bit for bit
+    /// [`Monitor::entry_host`] (`the_reflex_images_health_entries_match_the_host`; compiled,
+    /// ~490 cycles a pass).
+    #[inline(always)]
+    pub fn entry(&mut self, i: usize, e: &EntryView, now_us: u32) -> i32 {
+        #[cfg(target_arch = "m68k")]
+        {
+            extern "C" {
+                fn __reflex_health_entry(
+                    m: *mut Monitor,
+                    i: u32,
+                    e: *const EntryView,
+                    now_us: u32,
+                    lag_um: i32,
+                    torn_us: u32,
+                    lag_us: u32,
+                ) -> i32;
+            }
+            // SAFETY: the routine reads `e` and updates entry `i`'s words of `self` and the
+            // verdicts, at the offsets `entry_layout` asserts; `i` < ENTRIES.
+            unsafe { __reflex_health_entry(self, i as u32, e, now_us, LAG_UM, MAP_TORN_US, LAG_US) }
+        }
+        #[cfg(not(target_arch = "m68k"))]
+        self.entry_host(i, e, now_us)
+    }
+
+    /// [`Monitor::entry`] in Rust (the host's, and the reference for the image's).
+    #[cfg_attr(target_arch = "m68k", allow(dead_code))]
+    fn entry_host(&mut self, i: usize, e: &EntryView, now_us: u32) -> i32 {
         let now = now_us as i32;
         let since = |m: i32, since: u32| pick(m, now, since as i32) as u32;
         let older = |since: u32, limit: u32| {
@@ -249,6 +283,40 @@ impl Monitor {
         self.claims[i] = e.claim;
         self.states[i] = e.state;
         changed & !free
+    }
+}
+
+/// The layouts `__reflex_health_entry` (crates/rt/asm/servo.S) uses.
+mod entry_layout {
+    use super::{EntryView, Monitor};
+    use core::mem::offset_of;
+    const _: () = assert!(offset_of!(EntryView, claim) == 0);
+    const _: () = assert!(offset_of!(EntryView, state) == 4);
+    const _: () = assert!(offset_of!(EntryView, lag_um) == 8);
+    const _: () = assert!(offset_of!(EntryView, tracked) == 12);
+    const _: () = assert!(offset_of!(EntryView, undrawn) == 13);
+    const _: () = assert!(offset_of!(Monitor, claims) == 28);
+    const _: () = assert!(offset_of!(Monitor, states) == 52);
+    const _: () = assert!(offset_of!(Monitor, claimed_since_us) == 76);
+    const _: () = assert!(offset_of!(Monitor, lag_since_us) == 100);
+    const _: () = assert!(offset_of!(Monitor, verdict) == 136);
+}
+
+impl Monitor {
+    /// The verdicts of entry `i` after [`Monitor::entry`] (torn, lagging, behind now: -1
+    /// yes) and its kept words (claim, state, claimed since, lagging since), for the tests
+    /// that compare the image's with the host's.
+    pub fn entry_state(&self, i: usize) -> [i32; 7] {
+        let bit = |w: u32| -(((w >> i) & 1) as i32);
+        [
+            bit(self.verdict[0]),
+            bit(self.verdict[1]),
+            bit(self.verdict[2]),
+            self.claims[i] as i32,
+            self.states[i] as i32,
+            self.claimed_since_us[i] as i32,
+            self.lag_since_us[i] as i32,
+        ]
     }
 }
 

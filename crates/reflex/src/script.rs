@@ -366,3 +366,40 @@ pub fn scripted_clamp(w: &[i32; CLAMP_IN_WORDS], out: &mut [i32; 1]) {
     let s = crate::window::Span { lo: w[2], hi: w[3] };
     out[0] = crate::clamp_into(w[0], w[1], s, w[4]);
 }
+
+/// Words of one health-entry step ([`scripted_health_entry`]): the entry (0-5), its claim
+/// and state words, tracked and undrawn (0/1), its lag (um), the time (us).
+pub const HEALTH_IN_WORDS: usize = 7;
+/// Words of one health-entry answer: the returned mask, then
+/// `health::Monitor::entry_state` (the three verdicts and the four kept words).
+pub const HEALTH_OUT_WORDS: usize = 8;
+
+/// One step of a health monitor's entry reading (`health::Monitor::entry`, on the 68020
+/// `__reflex_health_entry`) on `m`, kept from step to step, from the words `w`; writes
+/// `out`. For the image's probe `reflex_probe_health` and the system tests.
+#[inline(never)]
+pub fn scripted_health_entry(
+    m: &mut crate::health::Monitor,
+    w: &[i32; HEALTH_IN_WORDS],
+    out: &mut [i32; HEALTH_OUT_WORDS],
+) {
+    let i = (w[0] as u32 % ENTRIES as u32) as usize;
+    let e = EntryView {
+        claim: w[1] as u32,
+        state: w[2] as u32,
+        tracked: w[3] != 0,
+        undrawn: w[4] != 0,
+        lag_um: w[5],
+    };
+    out[0] = m.entry(i, &e, w[6] as u32);
+    // Word by word: a loop copying the local array took its first word seven times on the
+    // 68k (docs/toolchain.md, class 6).
+    let s = m.entry_state(i);
+    out[1] = s[0];
+    out[2] = s[1];
+    out[3] = s[2];
+    out[4] = s[3];
+    out[5] = s[4];
+    out[6] = s[5];
+    out[7] = s[6];
+}

@@ -544,6 +544,98 @@ __reflex_clamp_into:
 9:  movem.l (%sp)+, %d2-%d3
     rts
 
+/* i32 __reflex_health_entry(Monitor *m, u32 i, const EntryView *e, u32 now_us, i32 lag_um,
+ *                           u32 torn_us, u32 lag_us):
+ * reflex::health::Monitor::entry, bit for bit `entry_host` (crates/reflex/src/health.rs
+ * asserts the offsets): entry i's claim and state kept, its claimed-since timer restarted
+ * when it is free or changed, its lagging-since timer when it is not behind (undrawn, or
+ * tracked more than lag_um off), its bits of the three verdicts (torn: claimed unchanged
+ * beyond torn_us; lagging: behind beyond lag_us; behind now); returns -1 when it is
+ * claimed and changed. EntryView: claim 0, state 4, lag_um 8, tracked 12 (byte), undrawn
+ * 13 (byte). Monitor: claims[6] 28, states[6] 52, claimed_since_us[6] 76, lag_since_us[6]
+ * 100, verdict[3] 136. Ages as the Rust's: now - since (wrapping), at most 2^30 unsigned. */
+    .section .text.__reflex_health_entry, "ax"
+    .globl __reflex_health_entry
+__reflex_health_entry:
+    movem.l %d2-%d5/%a2, -(%sp)     /* 20 bytes: arguments from 24(%sp) */
+    movea.l 24(%sp), %a0            /* m */
+    move.l  28(%sp), %d5            /* i */
+    movea.l 32(%sp), %a1            /* e */
+    move.l  36(%sp), %d4            /* now */
+    move.l  %d5, %d0
+    lsl.l   #2, %d0
+    lea     0(%a0,%d0.l), %a2       /* entry i's words at 28, 52, 76, 100 from here */
+    move.l  (%a1), %d2              /* claim */
+    move.l  28(%a2), %d0
+    eor.l   %d2, %d0
+    move.l  4(%a1), %d1             /* state */
+    move.l  52(%a2), %d3
+    eor.l   %d1, %d3
+    move.l  %d2, 28(%a2)
+    move.l  %d1, 52(%a2)
+    or.l    %d3, %d0
+    sne     %d0
+    extb.l  %d0                     /* changed */
+    tst.l   %d2
+    seq     %d1
+    extb.l  %d1                     /* free */
+    move.l  %d1, %d3
+    or.l    %d0, %d3
+    beq.s   1f
+    move.l  %d4, 76(%a2)            /* free or changed: claimed since now */
+1:  not.l   %d1
+    and.l   %d1, %d0                /* returned: changed and claimed */
+    moveq   #0, %d1                 /* behind */
+    tst.b   13(%a1)
+    bne.s   2f                      /* undrawn */
+    tst.b   12(%a1)
+    beq.s   3f                      /* not tracked */
+    move.l  40(%sp), %d2
+    sub.l   8(%a1), %d2            /* lag_um limit - lag */
+    bpl.s   3f
+2:  moveq   #-1, %d1
+    bra.s   4f
+3:  move.l  %d4, 100(%a2)           /* not behind: lagging since now */
+4:  moveq   #1, %d2
+    lsl.l   %d5, %d2                /* bit */
+    move.l  %d2, %d3
+    not.l   %d3
+    and.l   %d2, %d1
+    move.l  144(%a0), %d5
+    and.l   %d3, %d5
+    or.l    %d1, %d5
+    move.l  %d5, 144(%a0)           /* behind now */
+    move.l  %d4, %d1
+    sub.l   76(%a2), %d1
+    cmpi.l  #0x40000000, %d1
+    bls.s   5f
+    move.l  #0x40000000, %d1
+5:  move.l  44(%sp), %d5
+    sub.l   %d1, %d5
+    smi     %d5
+    extb.l  %d5
+    and.l   %d2, %d5
+    move.l  136(%a0), %d1
+    and.l   %d3, %d1
+    or.l    %d5, %d1
+    move.l  %d1, 136(%a0)           /* torn */
+    move.l  %d4, %d1
+    sub.l   100(%a2), %d1
+    cmpi.l  #0x40000000, %d1
+    bls.s   6f
+    move.l  #0x40000000, %d1
+6:  move.l  48(%sp), %d5
+    sub.l   %d1, %d5
+    smi     %d5
+    extb.l  %d5
+    and.l   %d2, %d5
+    move.l  140(%a0), %d1
+    and.l   %d3, %d1
+    or.l    %d5, %d1
+    move.l  %d1, 140(%a0)           /* lagging */
+    movem.l (%sp)+, %d2-%d5/%a2
+    rts
+
 /* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
