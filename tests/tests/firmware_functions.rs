@@ -734,8 +734,8 @@ fn the_unsigned_remainder_matches_the_host() {
     }
 }
 
-/// The record reader (`__vme_read_words`, the runtime's assembly) copies exactly the words
-/// asked for, in order, and nothing past them.
+/// The record reader and writer (`__vme_read_words`, the runtime's assembly) copies exactly
+/// the words asked for, in order, and nothing past them, from global RAM and to it.
 #[test]
 fn read_words_copies_the_words_asked_for() {
     let (mut b, img, mut g) = board_of(BoardId::Planner);
@@ -758,6 +758,23 @@ fn read_words_copies_the_words_asked_for() {
         }
         let past = BUF as usize + 4 * n as usize;
         assert_eq!(&b.ram[past..past + 4], &[0xEE; 4], "nothing past {n} words");
+        // The other way (`MmioGlobal::write_words`, a record's publication): local RAM to
+        // global, nothing past the words either.
+        let to = 0x3000u32;
+        for k in 0..64u32 {
+            ArrayBus::new(&mut g).write_u32(to + 4 * k, 0xEEEE_EEEE);
+        }
+        b.call(&mut g, f, &[BUF, vme_map::GLOBAL_RAM_BASE + to, n], 10_000)
+            .unwrap();
+        for k in 0..n {
+            let w = ArrayBus::new(&mut g).read_u32(to + 4 * k);
+            assert_eq!(w, 0x1000_0000 + k * 0x0101, "word {k} of {n} written");
+        }
+        assert_eq!(
+            ArrayBus::new(&mut g).read_u32(to + 4 * n),
+            0xEEEE_EEEE,
+            "nothing past {n} written"
+        );
     }
 }
 

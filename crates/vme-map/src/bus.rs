@@ -113,6 +113,16 @@ pub trait GlobalBus {
             a += 4;
         }
     }
+    /// Writes `words` to consecutive aligned words from `off`, in order: a record's words
+    /// under its sequence lock in one call (on the 68020 the same copy loop as
+    /// [`GlobalBus::read_words`], the other way).
+    fn write_words(&mut self, off: u32, words: &[u32]) {
+        let mut a = off;
+        for &w in words {
+            self.write_u32(a, w);
+            a += 4;
+        }
+    }
     /// How many of the `n` aligned words from `off`, `stride` bytes apart, are zero before
     /// the first that is not (`n` when none is): the free rows of a C-space map column from
     /// a row (on the 68020 a `TST.L` loop in the runtime's assembly).
@@ -181,6 +191,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn read_words(&mut self, off: u32, out: &mut [u32]) {
         (**self).read_words(off, out)
+    }
+    fn write_words(&mut self, off: u32, words: &[u32]) {
+        (**self).write_words(off, words)
     }
     fn count_column(
         &mut self,
@@ -419,6 +432,15 @@ impl GlobalBus for MmioGlobal {
         // SAFETY: `out.len()` aligned words of mapped global RAM from `off` (offsets come
         // from `layout`), copied into `out`, which the routine writes only within.
         unsafe { __vme_read_words(Self::ptr::<u32>(off), out.as_mut_ptr(), out.len() as u32) }
+    }
+    fn write_words(&mut self, off: u32, words: &[u32]) {
+        extern "C" {
+            // The same `MOVE.L (A0)+, (A1)+` loop, local RAM to global.
+            fn __vme_read_words(src: *const u32, dst: *mut u32, n: u32);
+        }
+        // SAFETY: `words.len()` aligned words of mapped global RAM from `off` (offsets come
+        // from `layout`), written from `words` only within them.
+        unsafe { __vme_read_words(words.as_ptr(), Self::ptr::<u32>(off), words.len() as u32) }
     }
     #[inline(always)]
     fn word_ptr(&mut self, off: u32) -> Option<*const u32> {
