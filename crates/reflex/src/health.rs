@@ -154,6 +154,70 @@ impl Monitor {
         if !self.started {
             self.start(h, now_us);
         }
+        match self.observe_code(h, now_us) {
+            1 => Some(Problem::MapStale),
+            2 => Some(Problem::MapTorn),
+            3 => Some(Problem::MapLag),
+            4 => Some(Problem::ObjectsStale),
+            _ => None,
+        }
+    }
+
+    /// [`Monitor::observe`] after the first reading, as a code (0 none, then 1-4 in the
+    /// order of precedence: stale map, torn map, lagging map, stale positions). On the
+    /// 68020 one call of `__reflex_health_observe` (crates/rt/asm/servo.S), bit for bit
+    /// [`Monitor::observe_host`] (the reflex image's scripted passes against the host,
+    /// `the_reflex_image_steps_like_the_host`, reach every problem; compiled, ~1,000
+    /// cycles a pass).
+    #[inline(always)]
+    fn observe_code(&mut self, h: &HealthInput, now_us: u32) -> u32 {
+        #[cfg(target_arch = "m68k")]
+        {
+            extern "C" {
+                fn __reflex_health_observe(
+                    m: *mut Monitor,
+                    hb: *const [u32; 3],
+                    frame: u32,
+                    torn: u32,
+                    fresh: u32,
+                    entries: *const EntryView,
+                    stride: u32,
+                    now_us: u32,
+                    limits: *const [u32; 5],
+                ) -> u32;
+            }
+            /// The limits the routine compares with: lag (um), then torn, lag, map and
+            /// positions staleness (us).
+            static LIMITS: [u32; 5] = [
+                LAG_UM as u32,
+                MAP_TORN_US,
+                LAG_US,
+                MAP_STALE_US,
+                OBJECTS_STALE_US,
+            ];
+            // SAFETY: the routine updates `self` at the offsets `entry_layout` asserts and
+            // reads the three heartbeats and the ENTRIES entries `stride` bytes apart.
+            unsafe {
+                __reflex_health_observe(
+                    self,
+                    &h.cspace_heartbeats,
+                    h.objects_frame,
+                    h.objects_torn as u32,
+                    h.fresh,
+                    h.entries.as_ptr(),
+                    core::mem::size_of::<EntryView>() as u32,
+                    now_us,
+                    &LIMITS,
+                )
+            }
+        }
+        #[cfg(not(target_arch = "m68k"))]
+        self.observe_host(h, now_us)
+    }
+
+    /// [`Monitor::observe_code`] in Rust (the host's, and the reference for the image's).
+    #[cfg_attr(target_arch = "m68k", allow(dead_code))]
+    fn observe_host(&mut self, h: &HealthInput, now_us: u32) -> u32 {
         // Decisions as masks (-1 = yes), not booleans (docs/toolchain.md).
         let now = now_us as i32;
         let older = |since: u32, limit: u32| {
@@ -198,13 +262,7 @@ impl Monitor {
         code = pick(lag, 3, code);
         code = pick(torn, 2, code);
         code = pick(stale, 1, code);
-        match code {
-            1 => Some(Problem::MapStale),
-            2 => Some(Problem::MapTorn),
-            3 => Some(Problem::MapLag),
-            4 => Some(Problem::ObjectsStale),
-            _ => None,
-        }
+        code as u32
     }
 }
 
@@ -286,7 +344,8 @@ impl Monitor {
     }
 }
 
-/// The layouts `__reflex_health_entry` (crates/rt/asm/servo.S) uses.
+/// The layouts `__reflex_health_entry` and `__reflex_health_observe` (crates/rt/asm/servo.S)
+/// use.
 mod entry_layout {
     use super::{EntryView, Monitor};
     use core::mem::offset_of;
@@ -300,6 +359,15 @@ mod entry_layout {
     const _: () = assert!(offset_of!(Monitor, claimed_since_us) == 76);
     const _: () = assert!(offset_of!(Monitor, lag_since_us) == 100);
     const _: () = assert!(offset_of!(Monitor, verdict) == 136);
+    const _: () = assert!(offset_of!(Monitor, hb) == 0);
+    const _: () = assert!(offset_of!(Monitor, hb_since_us) == 12);
+    const _: () = assert!(offset_of!(Monitor, frame) == 16);
+    const _: () = assert!(offset_of!(Monitor, frame_had) == 20);
+    const _: () = assert!(offset_of!(Monitor, frame_since_us) == 24);
+    const _: () = assert!(offset_of!(Monitor, hb_seen) == 124);
+    const _: () = assert!(offset_of!(Monitor, frame_seen) == 128);
+    const _: () = assert!(offset_of!(Monitor, behind_now) == 132);
+    const _: () = assert!(offset_of!(Monitor, seen) == 148);
 }
 
 impl Monitor {

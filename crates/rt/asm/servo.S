@@ -636,6 +636,122 @@ __reflex_health_entry:
     movem.l (%sp)+, %d2-%d5/%a2
     rts
 
+/* u32 __reflex_health_observe(Monitor *m, const u32 hb[3], u32 frame, u32 torn, u32 fresh,
+ *                             const EntryView *entries, u32 stride, u32 now_us,
+ *                             const u32 lim[5]):
+ * reflex::health::Monitor::observe after the first reading, bit for bit `observe_host`:
+ * the heartbeats and the object table's frame taken (their timers and seen masks), each
+ * entry with its bit in fresh read by __reflex_health_entry (entry i at entries + i stride),
+ * the map's timer restarted by a heartbeat or an entry at work, and the code of what is
+ * wrong (0 none, 1 stale map, 2 torn map, 3 lagging map, 4 stale positions). lim: lag (um),
+ * torn, lag, map stale, positions stale (us). Monitor: hb[3] 0, hb_since_us 12, frame 16,
+ * frame_had 20, frame_since_us 24, hb_seen 124, frame_seen 128, behind_now 132, verdict[3]
+ * 136, seen 148. */
+    .section .text.__reflex_health_observe, "ax"
+    .globl __reflex_health_observe
+__reflex_health_observe:
+    movem.l %d2-%d7/%a2-%a4, -(%sp) /* 36 bytes: arguments from 40(%sp) */
+    movea.l 40(%sp), %a2            /* m */
+    movea.l 44(%sp), %a0            /* hb */
+    move.l  68(%sp), %d7            /* now */
+    movea.l 72(%sp), %a4            /* lim */
+    /* beat: a heartbeat moved */
+    move.l  (%a0), %d0
+    move.l  (%a2), %d1
+    eor.l   %d0, %d1
+    move.l  %d0, (%a2)
+    move.l  4(%a0), %d0
+    move.l  4(%a2), %d2
+    eor.l   %d0, %d2
+    or.l    %d2, %d1
+    move.l  %d0, 4(%a2)
+    move.l  8(%a0), %d0
+    move.l  8(%a2), %d2
+    eor.l   %d0, %d2
+    or.l    %d2, %d1
+    move.l  %d0, 8(%a2)
+    tst.l   %d1
+    sne     %d6
+    extb.l  %d6                     /* beat */
+    or.l    %d6, 124(%a2)           /* hb_seen */
+    /* the frame: a new one (read whole) restarts its timer */
+    move.l  48(%sp), %d0            /* frame */
+    tst.l   52(%sp)
+    bne.s   2f                      /* torn: nothing taken */
+    cmp.l   16(%a2), %d0
+    beq.s   1f
+    move.l  20(%a2), %d1
+    or.l    %d1, 128(%a2)           /* frame_seen |= frame_had */
+    move.l  %d7, 24(%a2)            /* frame_since = now */
+1:  moveq   #-1, %d1
+    move.l  %d1, 20(%a2)            /* frame_had */
+    move.l  %d0, 16(%a2)            /* frame */
+2:  /* the entries read this pass */
+    move.l  56(%sp), %d5
+    moveq   #63, %d0
+    and.l   %d0, %d5
+    or.l    %d5, 148(%a2)           /* seen */
+    moveq   #0, %d4                 /* working */
+    moveq   #0, %d2                 /* i */
+    movea.l 60(%sp), %a3            /* &entries[0] */
+3:  tst.l   %d5
+    beq.s   5f
+    btst    #0, %d5
+    beq.s   4f
+    move.l  8(%a4), -(%sp)          /* lag_us */
+    move.l  4(%a4), -(%sp)          /* torn_us */
+    move.l  (%a4), -(%sp)           /* lag_um */
+    move.l  %d7, -(%sp)
+    move.l  %a3, -(%sp)
+    move.l  %d2, -(%sp)
+    move.l  %a2, -(%sp)
+    jsr     __reflex_health_entry
+    lea     28(%sp), %sp
+    or.l    %d0, %d4
+4:  lsr.l   #1, %d5
+    addq.l  #1, %d2
+    adda.l  64(%sp), %a3            /* + stride */
+    bra.s   3b
+5:  or.l    %d4, %d6
+    beq.s   6f
+    move.l  %d7, 12(%a2)            /* a heartbeat or an entry at work: hb_since = now */
+6:  tst.l   144(%a2)
+    sne     %d0
+    extb.l  %d0
+    move.l  %d0, 132(%a2)           /* behind_now */
+    /* the code, in order of precedence */
+    moveq   #1, %d0
+    tst.l   124(%a2)
+    beq.s   9f                      /* no heartbeat seen: stale */
+    move.l  %d7, %d1
+    sub.l   12(%a2), %d1
+    cmpi.l  #0x40000000, %d1
+    bls.s   7f
+    move.l  #0x40000000, %d1
+7:  move.l  12(%a4), %d3
+    sub.l   %d1, %d3
+    bmi.s   9f                      /* stale */
+    moveq   #2, %d0
+    tst.l   136(%a2)
+    bne.s   9f                      /* torn */
+    moveq   #3, %d0
+    tst.l   140(%a2)
+    bne.s   9f                      /* lagging */
+    moveq   #4, %d0
+    tst.l   128(%a2)
+    beq.s   9f                      /* no frame seen: stale positions */
+    move.l  %d7, %d1
+    sub.l   24(%a2), %d1
+    cmpi.l  #0x40000000, %d1
+    bls.s   8f
+    move.l  #0x40000000, %d1
+8:  move.l  16(%a4), %d3
+    sub.l   %d1, %d3
+    bmi.s   9f                      /* stale positions */
+    moveq   #0, %d0
+9:  movem.l (%sp)+, %d2-%d7/%a2-%a4
+    rts
+
 /* SQRT_Q16 x, r, t, u, s, a: x = fx::sqrt_q16(x), the square root of a non-negative Q16
  * value in Q16, 0 for x <= 0; r, t, u, s scratch data registers, a a scratch address
  * register. The input is shifted left by the largest even amount s <= 16 that keeps it in
