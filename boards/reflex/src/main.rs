@@ -24,6 +24,33 @@ fn main() -> ! {
     }
 }
 
+/// The probes' loop: answers `n` questions of `I` words each from `asks` with `f`, `O`
+/// words an answer into `out`. Inlined, so each probe stays in its own section.
+///
+/// # Safety
+/// `asks` holds `I` times `n` words and `out` has room for `O` times `n`, word aligned.
+#[inline(always)]
+unsafe fn each<const I: usize, const O: usize>(
+    asks: *const i32,
+    n: u32,
+    out: *mut i32,
+    mut f: impl FnMut(&[i32; I], &mut [i32; O]),
+) -> i32 {
+    let mut i = 0;
+    while i < n as usize {
+        // SAFETY: by the caller.
+        let (w, o) = unsafe {
+            (
+                &*(asks.add(I * i) as *const [i32; I]),
+                &mut *(out.add(O * i) as *mut [i32; O]),
+            )
+        };
+        f(w, o);
+        i += 1;
+    }
+    0
+}
+
 /// Test probe (never called by the board): runs a fresh reflex over `n` passes of scripted
 /// inputs (`reflex::script::IN_WORDS` words each) against the C-space map in global RAM and
 /// writes `reflex::script::OUT_WORDS` words per pass to `out`. The system tests compare it
@@ -70,20 +97,12 @@ pub extern "C" fn reflex_probe_escape(asks: *const i32, n: u32, out: *mut i32) -
     let s = unsafe { &mut *core::ptr::addr_of_mut!(SCRATCH) };
     // SAFETY: the probe runs on the reflex image, where global RAM is mapped.
     let mut g = unsafe { MmioGlobal::new() };
-    let mut i = 0;
-    while i < n {
-        // SAFETY: the caller passes ESCAPE_IN_WORDS n input words and room for
-        // ESCAPE_OUT_WORDS n outputs, word aligned.
-        let (w, o) = unsafe {
-            (
-                &*(asks.add(ESCAPE_IN_WORDS * i as usize) as *const [i32; ESCAPE_IN_WORDS]),
-                &mut *(out.add(ESCAPE_OUT_WORDS * i as usize) as *mut [i32; ESCAPE_OUT_WORDS]),
-            )
-        };
-        reflex::script::scripted_escape(s, w, &mut reflex::window::BusMap(&mut g), o);
-        i += 1;
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe {
+        each::<ESCAPE_IN_WORDS, ESCAPE_OUT_WORDS>(asks, n, out, |w, o| {
+            reflex::script::scripted_escape(s, w, &mut reflex::window::BusMap(&mut g), o)
+        })
     }
-    0
 }
 
 #[no_mangle]
@@ -95,18 +114,12 @@ pub extern "C" fn reflex_probe_evade(asks: *const i32, n: u32, out: *mut i32) ->
         [reflex::ObstacleView::NONE; reflex::OBSTACLES];
     let s = unsafe { &mut *core::ptr::addr_of_mut!(SCRATCH) };
     let obs = unsafe { &mut *core::ptr::addr_of_mut!(OBS) };
-    let mut i = 0;
-    while i < n {
-        let (w, o) = unsafe {
-            (
-                &*(asks.add(EVADE_IN_WORDS * i as usize) as *const [i32; EVADE_IN_WORDS]),
-                &mut *(out.add(EVADE_OUT_WORDS * i as usize) as *mut [i32; EVADE_OUT_WORDS]),
-            )
-        };
-        reflex::script::scripted_evade(s, w, obs, o);
-        i += 1;
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe {
+        each::<EVADE_IN_WORDS, EVADE_OUT_WORDS>(asks, n, out, |w, o| {
+            reflex::script::scripted_evade(s, w, obs, o)
+        })
     }
-    0
 }
 
 /// Test probe (never called by the board): `n` known-columns steps
@@ -122,20 +135,12 @@ pub extern "C" fn reflex_probe_known(steps: *const i32, n: u32, out: *mut i32) -
     let k = unsafe { &mut *core::ptr::addr_of_mut!(KNOWN) };
     // SAFETY: the probe runs on the reflex image, where global RAM is mapped.
     let mut g = unsafe { MmioGlobal::new() };
-    let mut i = 0;
-    while i < n {
-        // SAFETY: the caller passes KNOWN_IN_WORDS n words and room for KNOWN_OUT_WORDS n
-        // outputs, word aligned.
-        let (w, o) = unsafe {
-            (
-                &*(steps.add(KNOWN_IN_WORDS * i as usize) as *const [i32; KNOWN_IN_WORDS]),
-                &mut *(out.add(KNOWN_OUT_WORDS * i as usize) as *mut [i32; KNOWN_OUT_WORDS]),
-            )
-        };
-        reflex::script::scripted_known(k, &mut g, w, o);
-        i += 1;
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe {
+        each::<KNOWN_IN_WORDS, KNOWN_OUT_WORDS>(steps, n, out, |w, o| {
+            reflex::script::scripted_known(k, &mut g, w, o)
+        })
     }
-    0
 }
 
 fn safe_stop() {
@@ -151,20 +156,12 @@ fn safe_stop() {
 #[link_section = ".text.probe.reflex_prepare"]
 pub extern "C" fn reflex_probe_prepare(asks: *const i32, n: u32, out: *mut i32) -> i32 {
     use reflex::script::{PREPARE_IN_WORDS, PREPARE_OUT_WORDS};
-    let mut i = 0;
-    while i < n {
-        // SAFETY: the caller passes PREPARE_IN_WORDS n input words and room for
-        // PREPARE_OUT_WORDS n outputs, word aligned.
-        let (w, o) = unsafe {
-            (
-                &*(asks.add(PREPARE_IN_WORDS * i as usize) as *const [i32; PREPARE_IN_WORDS]),
-                &mut *(out.add(PREPARE_OUT_WORDS * i as usize) as *mut [i32; PREPARE_OUT_WORDS]),
-            )
-        };
-        reflex::script::scripted_prepare(w, o);
-        i += 1;
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe {
+        each::<PREPARE_IN_WORDS, PREPARE_OUT_WORDS>(asks, n, out, |w, o| {
+            reflex::script::scripted_prepare(w, o)
+        })
     }
-    0
 }
 
 /// Test probe (never called by the board): `n` stall questions
@@ -175,20 +172,12 @@ pub extern "C" fn reflex_probe_prepare(asks: *const i32, n: u32, out: *mut i32) 
 #[link_section = ".text.probe.reflex_stall"]
 pub extern "C" fn reflex_probe_stall(asks: *const i32, n: u32, out: *mut i32) -> i32 {
     use reflex::script::{STALL_IN_WORDS, STALL_OUT_WORDS};
-    let mut i = 0;
-    while i < n {
-        // SAFETY: the caller passes STALL_IN_WORDS n input words and room for
-        // STALL_OUT_WORDS n outputs, word aligned.
-        let (w, o) = unsafe {
-            (
-                &*(asks.add(STALL_IN_WORDS * i as usize) as *const [i32; STALL_IN_WORDS]),
-                &mut *(out.add(STALL_OUT_WORDS * i as usize) as *mut [i32; STALL_OUT_WORDS]),
-            )
-        };
-        reflex::script::scripted_stall(w, o);
-        i += 1;
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe {
+        each::<STALL_IN_WORDS, STALL_OUT_WORDS>(asks, n, out, |w, o| {
+            reflex::script::scripted_stall(w, o)
+        })
     }
-    0
 }
 
 /// Test probe (never called by the board): `n` goal-clamp questions
@@ -199,20 +188,8 @@ pub extern "C" fn reflex_probe_stall(asks: *const i32, n: u32, out: *mut i32) ->
 #[link_section = ".text.probe.reflex_clamp"]
 pub extern "C" fn reflex_probe_clamp(asks: *const i32, n: u32, out: *mut i32) -> i32 {
     use reflex::script::CLAMP_IN_WORDS;
-    let mut i = 0;
-    while i < n {
-        // SAFETY: the caller passes CLAMP_IN_WORDS n input words and room for n outputs,
-        // word aligned.
-        let (w, o) = unsafe {
-            (
-                &*(asks.add(CLAMP_IN_WORDS * i as usize) as *const [i32; CLAMP_IN_WORDS]),
-                &mut *(out.add(i as usize) as *mut [i32; 1]),
-            )
-        };
-        reflex::script::scripted_clamp(w, o);
-        i += 1;
-    }
-    0
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe { each::<CLAMP_IN_WORDS, 1>(asks, n, out, reflex::script::scripted_clamp) }
 }
 
 /// Test probe (never called by the board): `n` steps of one health monitor's entry readings
@@ -227,18 +204,10 @@ pub extern "C" fn reflex_probe_health(steps: *const i32, n: u32, out: *mut i32) 
     static mut MONITOR: reflex::health::Monitor = reflex::health::Monitor::new();
     // SAFETY: the probe is the only code that touches MONITOR.
     let m = unsafe { &mut *core::ptr::addr_of_mut!(MONITOR) };
-    let mut i = 0;
-    while i < n {
-        // SAFETY: the caller passes HEALTH_IN_WORDS n input words and room for
-        // HEALTH_OUT_WORDS n outputs, word aligned.
-        let (w, o) = unsafe {
-            (
-                &*(steps.add(HEALTH_IN_WORDS * i as usize) as *const [i32; HEALTH_IN_WORDS]),
-                &mut *(out.add(HEALTH_OUT_WORDS * i as usize) as *mut [i32; HEALTH_OUT_WORDS]),
-            )
-        };
-        reflex::script::scripted_health_entry(m, w, o);
-        i += 1;
+    // SAFETY: the caller passes the words of n questions and room for n answers.
+    unsafe {
+        each::<HEALTH_IN_WORDS, HEALTH_OUT_WORDS>(steps, n, out, |w, o| {
+            reflex::script::scripted_health_entry(m, w, o)
+        })
     }
-    0
 }

@@ -401,6 +401,17 @@ __reflex_prepare:
     movem.l (%sp)+, %d2-%d7/%a2-%a5
     rts
 
+/* AGE d, now, since: d = min(now - since, 2^30) unsigned, the Rust's age of a timer
+ * (`now.wrapping_sub(since).min(1 << 30)`); now and since any addressing modes. */
+.macro AGE d, now, since
+    move.l  \now, \d
+    sub.l   \since, \d
+    cmpi.l  #0x40000000, \d
+    bls.s   .Lage\@
+    move.l  #0x40000000, \d
+.Lage\@:
+.endm
+
 /* u32 __reflex_stall(const ServoView *sv, const i32 goal[2], const i32 sub[2],
  *                    StallClock *clk, u32 now_us, const StallConst *c):
  * reflex::stall_flags, bit for bit `stall_flags_host` (crates/reflex/src/lib.rs asserts the
@@ -434,11 +445,13 @@ __reflex_stall:
     move.l  4(%a4), %d1
     subq.l  #1, %d1
     move.l  8(%a0), %d0
+    tst.l   %d0                     /* (the image check wants a test before a branch) */
     bpl.s   1f
     neg.l   %d0
 1:  move.l  %d1, %d3
     sub.l   %d0, %d3
     move.l  12(%a0), %d0
+    tst.l   %d0                     /* (the image check wants a test before a branch) */
     bpl.s   2f
     neg.l   %d0
 2:  sub.l   %d0, %d1
@@ -485,12 +498,8 @@ __reflex_stall:
     or.l    %d5, %d1                /* or moved */
     or.l    %d3, %d1                /* or moving: the clock restarts */
     bmi.s   10f
-    move.l  48(%sp), %d1
-    sub.l   8(%a3), %d1             /* now - since, wrapping */
-    cmpi.l  #0x40000000, %d1
-    bls.s   9f
-    move.l  #0x40000000, %d1        /* at most 2^30 (unsigned) */
-9:  move.l  12(%a4), %d2
+    AGE     %d1, 48(%sp), 8(%a3)    /* stuck for */
+    move.l  12(%a4), %d2
     sub.l   %d1, %d2                /* stall_us - stuck_for */
     bpl.s   11f
     or.l    24(%a4), %d0            /* stalled */
@@ -605,12 +614,8 @@ __reflex_health_entry:
     and.l   %d3, %d5
     or.l    %d1, %d5
     move.l  %d5, 144(%a0)           /* behind now */
-    move.l  %d4, %d1
-    sub.l   76(%a2), %d1
-    cmpi.l  #0x40000000, %d1
-    bls.s   5f
-    move.l  #0x40000000, %d1
-5:  move.l  44(%sp), %d5
+    AGE     %d1, %d4, 76(%a2)
+    move.l  44(%sp), %d5
     sub.l   %d1, %d5
     smi     %d5
     extb.l  %d5
@@ -619,12 +624,8 @@ __reflex_health_entry:
     and.l   %d3, %d1
     or.l    %d5, %d1
     move.l  %d1, 136(%a0)           /* torn */
-    move.l  %d4, %d1
-    sub.l   100(%a2), %d1
-    cmpi.l  #0x40000000, %d1
-    bls.s   6f
-    move.l  #0x40000000, %d1
-6:  move.l  48(%sp), %d5
+    AGE     %d1, %d4, 100(%a2)
+    move.l  48(%sp), %d5
     sub.l   %d1, %d5
     smi     %d5
     extb.l  %d5
@@ -723,12 +724,8 @@ __reflex_health_observe:
     moveq   #1, %d0
     tst.l   124(%a2)
     beq.s   9f                      /* no heartbeat seen: stale */
-    move.l  %d7, %d1
-    sub.l   12(%a2), %d1
-    cmpi.l  #0x40000000, %d1
-    bls.s   7f
-    move.l  #0x40000000, %d1
-7:  move.l  12(%a4), %d3
+    AGE     %d1, %d7, 12(%a2)
+    move.l  12(%a4), %d3
     sub.l   %d1, %d3
     bmi.s   9f                      /* stale */
     moveq   #2, %d0
@@ -740,12 +737,8 @@ __reflex_health_observe:
     moveq   #4, %d0
     tst.l   128(%a2)
     beq.s   9f                      /* no frame seen: stale positions */
-    move.l  %d7, %d1
-    sub.l   24(%a2), %d1
-    cmpi.l  #0x40000000, %d1
-    bls.s   8f
-    move.l  #0x40000000, %d1
-8:  move.l  16(%a4), %d3
+    AGE     %d1, %d7, 24(%a2)
+    move.l  16(%a4), %d3
     sub.l   %d1, %d3
     bmi.s   9f                      /* stale positions */
     moveq   #0, %d0
