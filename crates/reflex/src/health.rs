@@ -85,7 +85,7 @@ pub enum Problem {
 }
 
 /// Tracks the inputs' freshness over passes. `repr(C)`: the runtime's
-/// `__reflex_health_entry` updates an entry's part of it (offsets asserted in
+/// `__reflex_health_observe` and `__reflex_health_entry` update it (offsets asserted in
 /// `entry_layout`).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
