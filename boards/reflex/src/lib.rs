@@ -314,21 +314,18 @@ fn view<G: GlobalBus>(
     );
     let flags = beacon_word(objects, b, 3);
     let r = worklist::radius(g, i as u32);
-    // A reading beyond the calibrated square (flagged extrapolated) as the C-space boards
-    // draw it: the disk over its fold. Any other is `drawn_disk` without a fold, the
-    // reading grown by the sensing board's tolerance (the same words, without the calls:
-    // ~500 cycles a slot a pass).
-    if flags & beacon_flags::EXTRAPOLATED != 0 {
-        let area = worklist::calibrated_area(g);
-        let d = worklist::drawn_disk(x, y, r, worklist::fold_of(x, y, flags, &area));
-        o.x_um = d.x_um;
-        o.y_um = d.y_um;
-        o.r_um = d.r_um;
+    // The disk the C-space boards draw: a reading beyond the calibrated square (flagged
+    // extrapolated) over its fold; only such a reading has one, so only it reads the
+    // square and asks `fold_of` (~500 cycles a slot a pass otherwise).
+    let fold = if flags & beacon_flags::EXTRAPOLATED != 0 {
+        worklist::fold_of(x, y, flags, &worklist::calibrated_area(g))
     } else {
-        o.x_um = x;
-        o.y_um = y;
-        o.r_um = r + beacon_flags::TOLERANCE_UM;
-    }
+        0
+    };
+    let d = worklist::drawn_disk(x, y, r, fold);
+    o.x_um = d.x_um;
+    o.y_um = d.y_um;
+    o.r_um = d.r_um;
     o.vx_um_s = sx * K;
     o.vy_um_s = sy * K;
     o.t_us = beacon_word(objects, b, 2);

@@ -158,9 +158,7 @@ pub extern "C" fn reflex_probe_prepare(asks: *const i32, n: u32, out: *mut i32) 
     use reflex::script::{PREPARE_IN_WORDS, PREPARE_OUT_WORDS};
     // SAFETY: the caller passes the words of n questions and room for n answers.
     unsafe {
-        each::<PREPARE_IN_WORDS, PREPARE_OUT_WORDS>(asks, n, out, |w, o| {
-            reflex::script::scripted_prepare(w, o)
-        })
+        each::<PREPARE_IN_WORDS, PREPARE_OUT_WORDS>(asks, n, out, reflex::script::scripted_prepare)
     }
 }
 
@@ -173,11 +171,7 @@ pub extern "C" fn reflex_probe_prepare(asks: *const i32, n: u32, out: *mut i32) 
 pub extern "C" fn reflex_probe_stall(asks: *const i32, n: u32, out: *mut i32) -> i32 {
     use reflex::script::{STALL_IN_WORDS, STALL_OUT_WORDS};
     // SAFETY: the caller passes the words of n questions and room for n answers.
-    unsafe {
-        each::<STALL_IN_WORDS, STALL_OUT_WORDS>(asks, n, out, |w, o| {
-            reflex::script::scripted_stall(w, o)
-        })
-    }
+    unsafe { each::<STALL_IN_WORDS, STALL_OUT_WORDS>(asks, n, out, reflex::script::scripted_stall) }
 }
 
 /// Test probe (never called by the board): `n` goal-clamp questions

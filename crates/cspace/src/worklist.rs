@@ -87,6 +87,9 @@ pub fn fold_of(x_um: i32, y_um: i32, flags: u32, area_um: &[i32; 4]) -> u32 {
 /// `y_um`) with the fold `bits`: [`folded`], its radius grown first by the sensing board's
 /// tolerance (`beacon_flags::TOLERANCE_UM`, 3 mm), so that the image holds the obstacle
 /// wherever the reading may have put it. The reflex's evasion takes the same disk.
+/// Inlined, as [`folded`]'s test: a reading with no fold costs no call (the reflex asks
+/// for every obstacle on every pass among moving ones).
+#[inline(always)]
 pub fn drawn_disk(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
     folded(x_um, y_um, r_um + beacon_flags::TOLERANCE_UM, bits)
 }
@@ -100,13 +103,20 @@ pub fn drawn_disk(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
 /// [`FOLD_CORNER_UM`] along both axes. A disk centred half-way along the fold, its radius
 /// grown by half the fold's length and [`FOLD_SIDE_UM`], covers the fold grown by the
 /// radius and the side (triangle inequality). With no fold, the disk as read.
-#[inline(never)]
+#[inline(always)]
 pub fn folded(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
-    // Most readings are inside the square: the disk as read, without the products below
-    // (the reflex asks for every obstacle on every pass among moving ones).
+    // Most readings are inside the square: the disk as read, without the call and the
+    // products of the fold (the reflex asks for every obstacle on every pass among moving
+    // ones).
     if bits & FOLD_MASK == 0 {
         return Disk { x_um, y_um, r_um };
     }
+    fold_out(x_um, y_um, r_um, bits)
+}
+
+/// [`folded`] for a reading with a fold.
+#[inline(never)]
+fn fold_out(x_um: i32, y_um: i32, r_um: i32, bits: u32) -> Disk {
     // Direction along x and y, and whether folded at all / past a corner, from a table: the
     // masks this was written with first compiled to selects whose flags a register copy
     // clobbered (docs/toolchain.md, class 1).
