@@ -194,6 +194,100 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
     }
 }
 
+/// The image's `__cspace_columns` (the column extents in the runtime's assembly) called
+/// directly on the emulated CPU gives, column for column, the words the host's
+/// `raster::column` gives: for the images of random disks as they are, and with vertical
+/// segments made in them (a vertex moved onto its neighbour's theta1) and spread round
+/// theta1 as wrapping images: neither is found among the database's images, so the
+/// routine's branches for them are tested only here.
+#[test]
+fn the_cspace_images_column_extents_match_the_host() {
+    use sim_host::emu::EmuBoard;
+    use sim_host::image::Image;
+    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let id = BoardId::Cspace0;
+    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let routine = img.symbol("__cspace_columns").unwrap();
+    // The shape at SHAPE (cspace::Shape, repr(C)), the columns at OUT (32 bytes each).
+    const SHAPE: u32 = 0xC0000;
+    const OUT: u32 = 0xC1000;
+    let (mut shapes, mut vertical, mut wrapping) = (0, 0, 0);
+    // Random disks, then a 2-inch obstacle every 2 mm out from the shoulder.
+    let swept = (20..=260).map(|k| cspace::Disk {
+        x_um: 1_732 * k,
+        y_um: 1_000 * k,
+        r_um: 28_500,
+    });
+    for (n, disk) in (0..300)
+        .map(|n| random_disk(93, n))
+        .chain(swept)
+        .enumerate()
+    {
+        let n = n as u64;
+        let Ok(im) = cspace::images(&disk) else {
+            continue;
+        };
+        for (i, shape) in [im.front, im.rear].into_iter().enumerate() {
+            let Some(mut s) = shape else { continue };
+            if n % 3 == 1 {
+                // Vertical segments: vertex k + 1 (and for some, k + 2) moved onto vertex k's
+                // theta1, at places the disk's digits pick, and the last one.
+                let d = random_disk(94, n * 2 + i as u64);
+                for pick in [d.x_um, d.y_um] {
+                    let k = pick.unsigned_abs() as usize % 32;
+                    s.theta1_u[k + 1] = s.theta1_u[k];
+                }
+                // The walk passes over vertical segments but at the last vertex, where the
+                // last column's left edge lies on it when theta1 there ends a pixel: so.
+                let end = s.theta1_u[32] | 255;
+                s.theta1_u[31] = end;
+                s.theta1_u[32] = end;
+                vertical += 1;
+            } else if n % 3 == 2 {
+                // An image all the way round theta1 (none of the database's does): the
+                // vertices spread over a revolution.
+                let (t0, w) = (s.theta1_u[0], s.theta1_u[32] - s.theta1_u[0]);
+                for t in s.theta1_u.iter_mut() {
+                    *t = t0 + ((*t - t0) as i64 * 32_768 / w as i64) as i32;
+                }
+                s.wraps = true;
+            }
+            wrapping += s.wraps as u32;
+            let mut bytes = Vec::with_capacity(400);
+            for v in s.theta1_u.iter().chain(&s.upper_u).chain(&s.lower_u) {
+                bytes.extend_from_slice(&v.to_be_bytes());
+            }
+            bytes.push(s.wraps as u8);
+            b.ram[SHAPE as usize..SHAPE as usize + bytes.len()].copy_from_slice(&bytes);
+            let mut want = Vec::new();
+            let (c0, c1) = cspace::raster::each_column(&s, |w| want.push(w));
+            let args = [SHAPE, c0 as u32, c1 as u32, OUT];
+            b.call(&mut global, routine, &args, 10_000_000)
+                .expect("the routine returns");
+            let word = |o: usize| {
+                let o = OUT as usize + 4 * o;
+                u32::from_be_bytes([b.ram[o], b.ram[o + 1], b.ram[o + 2], b.ram[o + 3]])
+            };
+            for (j, w) in want.iter().enumerate() {
+                let got: Vec<u32> = (0..8).map(|f| word(8 * j + f)).collect();
+                assert_eq!(
+                    &got[..],
+                    &w[..],
+                    "disk {n}, image {i}, column {}",
+                    c0 + j as i32
+                );
+            }
+            shapes += 1;
+        }
+    }
+    assert!(
+        shapes > 700 && vertical > 200 && wrapping > 200,
+        "{shapes} shapes, {vertical} with vertical segments, {wrapping} wrapping"
+    );
+}
+
 /// The cspace image's differential move (its column extents and pair walk in assembly,
 /// through the probe `cspace_probe_move`) leaves the counters the host's draw-then-erase
 /// leaves, bit for bit: for random disks moved a little (0-3 mm, the moves the boards redraw

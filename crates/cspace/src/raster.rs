@@ -509,6 +509,31 @@ fn all_columns(s: &Shape, c0: i32, c1: i32, out: &mut [MaybeUninit<Column>; MAX_
     }
 }
 
+/// Every column of image `s`, in order from its first, as the eight words of a [`Column`]
+/// (`col`, `first`, `rows`, `lower_rows`, `upper_from`, `lower_mask`, `upper_mask`,
+/// `ends`) handed to `f`: what `__cspace_columns` writes on the 68020, for the system tests
+/// to compare the image's routine with. Returns the columns' range (unwrapped, inclusive).
+pub fn each_column(s: &Shape, mut f: impl FnMut([u32; 8])) -> (i32, i32) {
+    let (c0, c1) = shape_columns(s);
+    let mut k = 0usize;
+    let mut edge = Edge::NONE;
+    let mut col = NO_COLUMN;
+    for c in c0..c1 + 1 {
+        column(s, c, c0, c1, &mut k, &mut edge, &mut col);
+        f([
+            col.col,
+            col.first as u32,
+            col.rows,
+            col.lower_rows,
+            col.upper_from,
+            col.lower_mask,
+            col.upper_mask,
+            col.ends,
+        ]);
+    }
+    (c0, c1)
+}
+
 /// Words a [`RunLog`] holds: 16 KiB, a worst-case job's decrements several times over (a
 /// 2-inch obstacle's two link-2 images are some 200 columns of three words when they must
 /// be erased whole; a small move leaves a few runs a column, one word each).

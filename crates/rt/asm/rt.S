@@ -1234,106 +1234,77 @@ __sense_process:
  * Bit-identical to raster::column called for each c in turn (the host's code, which the
  * system tests compare the image with): the chains' extremes over the strip [a, b] of the
  * column, at its edges (each chain evaluated one unit outward, the division truncated)
- * and at the vertices inside it. The compiled code spent ~1,100 cycles a column. */
+ * and at the vertices inside it. The column, the strip's right edge and the extremes stay
+ * in registers, and one pointer to vertex j reaches its theta1 and both chains' values
+ * (the arrays lie 132 bytes apart): ~1,150 cycles a column with the state in the frame,
+ * ~1,100 compiled. */
     .section .text.__cspace_columns, "ax"
     .globl __cspace_columns
-    .set    CK, -4              /* segment holding the strip's left edge (kept) */
-    .set    CET, -8             /* last right edge: t, segment, upper, lower */
-    .set    CEK, -12
-    .set    CEU, -16
-    .set    CEL, -20
-    .set    CC, -24             /* column */
-    .set    CA, -28             /* strip [a, b] */
-    .set    CB, -32
-    .set    CUA, -36            /* chains at a and b */
-    .set    CLA, -40
-    .set    CUB, -44
-    .set    CLB, -48
-    .set    CJ, -52
-/* Both chains at the strip edge in frame slot \t on the segment in slot \seg (already in
- * d0), each one unit outward (.Lceval), into slots \up and \low; leaves the lower's in d0. */
-    .macro  CHAINS_AT seg, t, up, low
-    move.l  \t(%a6), %d1
-    move.l  %a1, %a4
-    moveq   #0, %d3
-    bsr     .Lceval
-    addq.l  #1, %d0
-    move.l  %d0, \up(%a6)
-    move.l  \seg(%a6), %d0
-    move.l  \t(%a6), %d1
-    move.l  %a2, %a4
-    moveq   #1, %d3
-    bsr     .Lceval
-    subq.l  #1, %d0
-    move.l  %d0, \low(%a6)
-    .endm
+    .set    CK, 0               /* segment holding the strip's left edge (kept) */
+    .set    CET, 4              /* last right edge: t, segment, upper, lower */
+    .set    CEK, 8
+    .set    CEU, 12
+    .set    CEL, 16
+    .set    CUA, 20             /* the chains at the strip's left edge */
+    .set    CLA, 24
+    .set    CLOC, 28            /* locals' bytes */
+    .set    CARG, 4 + 40 + CLOC /* the arguments: s, c0, c1, out */
 __cspace_columns:
-    link    %a6, #-52
-    movem.l %d2-%d7/%a2-%a5, -(%sp)
-    move.l  8(%a6), %a0         /* theta1 */
-    lea     132(%a0), %a1       /* upper */
-    lea     264(%a0), %a2       /* lower */
-    move.l  20(%a6), %a3        /* out */
-    clr.l   CK(%a6)
-    move.l  #0x80000000, CET(%a6)
+    movem.l %d2-%d7/%a3-%a6, -(%sp)
+    lea     -CLOC(%sp), %sp
+    movea.l CARG(%sp), %a0      /* theta1; upper at 132, lower at 264 */
+    movea.l CARG+12(%sp), %a3   /* out */
+    movea.l CARG+4(%sp), %a6    /* c */
+    clr.l   CK(%sp)
+    move.l  #0x80000000, CET(%sp)
     moveq   #-1, %d0
-    move.l  %d0, CEK(%a6)
-    move.l  12(%a6), CC(%a6)
+    move.l  %d0, CEK(%sp)
 .Lcol:
-    move.l  CC(%a6), %d0
-    cmp.l   16(%a6), %d0
+    move.l  %a6, %d0
+    cmp.l   CARG+8(%sp), %d0
     bgt     .Ldone
-    /* a = max(256 c, t[0]), b = min(256 c + 256, t[32]) */
+    /* a = max(256 c, t[0]) in d1, b = min(256 c + 256, t[32]) in d3 */
+    lsl.l   #8, %d0
     move.l  %d0, %d1
-    lsl.l   #8, %d1
-    move.l  (%a0), %d2
-    cmp.l   %d2, %d1
+    cmp.l   (%a0), %d1
     bge.s   1f
-    move.l  %d2, %d1
-1:  move.l  %d1, CA(%a6)
-    move.l  %d0, %d1
-    lsl.l   #8, %d1
-    add.l   #256, %d1
-    move.l  128(%a0), %d2
-    cmp.l   %d2, %d1
+    move.l  (%a0), %d1
+1:  move.l  %d0, %d3
+    addi.l  #256, %d3
+    cmp.l   128(%a0), %d3
     ble.s   1f
-    move.l  %d2, %d1
-1:  move.l  %d1, CB(%a6)
+    move.l  128(%a0), %d3
     /* while k < 31 && t[k + 1] <= a: k++ */
-    move.l  CK(%a6), %d0
-2:  moveq   #31, %d1
-    cmp.l   %d1, %d0
+1:  move.l  CK(%sp), %d0
+    moveq   #31, %d2
+2:  cmp.l   %d2, %d0
     bge.s   3f
-    move.l  4(%a0,%d0.l*4), %d1
-    cmp.l   CA(%a6), %d1
-    bgt.s   3f
+    cmp.l   4(%a0,%d0.l*4), %d1
+    blt.s   3f
     addq.l  #1, %d0
     bra.s   2b
-3:  move.l  %d0, CK(%a6)
+3:  move.l  %d0, CK(%sp)
     /* the chains at a: the last column's right edge when it is the same point */
-    move.l  CET(%a6), %d1
-    cmp.l   CA(%a6), %d1
+    cmp.l   CET(%sp), %d1
     bne.s   4f
-    cmp.l   CEK(%a6), %d0
+    cmp.l   CEK(%sp), %d0
     bne.s   4f
-    move.l  CEU(%a6), CUA(%a6)
-    move.l  CEL(%a6), CLA(%a6)
+    move.l  CEU(%sp), %d4
+    move.l  CEL(%sp), %d6
     bra.s   5f
-4:  CHAINS_AT CK, CA, CUA, CLA
-5:  move.l  CUA(%a6), %d4       /* umax */
-    move.l  %d4, %d5            /* umin */
-    move.l  CLA(%a6), %d6       /* lmax */
-    move.l  %d6, %d7            /* lmin */
-    /* the vertices inside: j from k while j < 31 && t[j + 1] < b */
-    move.l  CK(%a6), %d0
-6:  moveq   #31, %d1
-    cmp.l   %d1, %d0
-    bge.s   7f
-    move.l  4(%a0,%d0.l*4), %d1
-    cmp.l   CB(%a6), %d1
-    bge.s   7f
-    addq.l  #1, %d0
-    move.l  (%a1,%d0.l*4), %d1
+4:  bsr     .Lceval2
+    move.l  %d0, %d4
+    move.l  %d1, %d6
+5:  move.l  %d4, CUA(%sp)
+    move.l  %d6, CLA(%sp)
+    move.l  %d4, %d5            /* umax d4, umin d5, lmax d6, lmin d7 */
+    move.l  %d6, %d7
+    /* the vertices inside: j from k while t[j + 1] < b (j < 31 follows: b <= t[32]) */
+    move.l  CK(%sp), %d0
+    lea     4(%a0,%d0.l*4), %a5 /* &t[j + 1] */
+6:  cmp.l   (%a5)+, %d3
+    ble.s   7f
+    move.l  128(%a5), %d1       /* upper[j], j the vertex just passed, one unit outward */
     addq.l  #1, %d1
     cmp.l   %d4, %d1
     ble.s   8f
@@ -1341,130 +1312,141 @@ __cspace_columns:
 8:  cmp.l   %d5, %d1
     bge.s   8f
     move.l  %d1, %d5
-8:  move.l  (%a2,%d0.l*4), %d1
+8:  move.l  260(%a5), %d1       /* lower[j] */
     subq.l  #1, %d1
     cmp.l   %d6, %d1
     ble.s   8f
     move.l  %d1, %d6
 8:  cmp.l   %d7, %d1
-    bge.s   8f
+    bge.s   6b
     move.l  %d1, %d7
-8:  bra.s   6b
-7:  move.l  %d0, CJ(%a6)
+    bra.s   6b
+7:  move.l  %a5, %d0            /* j = (&t[j + 2] - t) / 4 - 2 */
+    sub.l   %a0, %d0
+    asr.l   #2, %d0
+    subq.l  #2, %d0
     /* the chains at b, kept as the next column's left edge */
-    CHAINS_AT CJ, CB, CUB, CLB
-    move.l  CB(%a6), CET(%a6)
-    move.l  CJ(%a6), CEK(%a6)
-    move.l  CUB(%a6), CEU(%a6)
-    move.l  %d0, CEL(%a6)
-    move.l  CUB(%a6), %d1
-    cmp.l   %d4, %d1
+    move.l  %d0, CEK(%sp)
+    move.l  %d3, CET(%sp)
+    move.l  %d3, %d1
+    bsr     .Lceval2
+    move.l  %d0, CEU(%sp)
+    move.l  %d1, CEL(%sp)
+    cmp.l   %d4, %d0
     ble.s   1f
-    move.l  %d1, %d4
-1:  cmp.l   %d5, %d1
+    move.l  %d0, %d4
+1:  cmp.l   %d5, %d0
     bge.s   1f
-    move.l  %d1, %d5
-1:  cmp.l   %d6, %d0
+    move.l  %d0, %d5
+1:  cmp.l   %d6, %d1
     ble.s   1f
-    move.l  %d0, %d6
-1:  cmp.l   %d7, %d0
+    move.l  %d1, %d6
+1:  cmp.l   %d7, %d1
     bge.s   1f
-    move.l  %d0, %d7
+    move.l  %d1, %d7
 1:  /* the column: first row, rows, boundary runs, edge normals */
-    move.l  CC(%a6), %d0
-    moveq   #127, %d1
-    and.l   %d1, %d0
-    move.l  %d0, (%a3)          /* col */
+    move.l  %a6, %d2
+    andi.l  #127, %d2
+    move.l  %d2, (%a3)+         /* col */
     asr.l   #8, %d7             /* first = pix(lmin) */
-    move.l  %d7, 4(%a3)
+    move.l  %d7, (%a3)+
     asr.l   #8, %d4             /* rows = clamp(pix(umax) - first + 1, 1, 128) */
     sub.l   %d7, %d4
     addq.l  #1, %d4
-    moveq   #1, %d1
-    cmp.l   %d1, %d4
+    moveq   #1, %d2
+    cmp.l   %d2, %d4
     bge.s   1f
-    move.l  %d1, %d4
-1:  move.l  #128, %d1
-    cmp.l   %d1, %d4
+    move.l  %d2, %d4
+1:  move.l  #128, %d2
+    cmp.l   %d2, %d4
     ble.s   1f
-    move.l  %d1, %d4
-1:  move.l  %d4, 8(%a3)
+    move.l  %d2, %d4
+1:  move.l  %d4, (%a3)+
     asr.l   #8, %d6             /* lower_rows = max(pix(lmax) - first + 1, 0) */
     sub.l   %d7, %d6
     addq.l  #1, %d6
     bpl.s   1f
     moveq   #0, %d6
-1:  move.l  %d6, 12(%a3)
+1:  move.l  %d6, (%a3)+
     asr.l   #8, %d5             /* upper_from = max(pix(umin) - first, 0) */
     sub.l   %d7, %d5
     bpl.s   1f
     moveq   #0, %d5
-1:  move.l  %d5, 16(%a3)
-    moveq   #1, %d0             /* lower_mask = M2 | (lb > la: P1, lb < la: M1) */
-    move.l  CLB(%a6), %d1
-    cmp.l   CLA(%a6), %d1
+1:  move.l  %d5, (%a3)+
+    moveq   #1, %d2             /* lower_mask = M2 | (lb > la: P1, lb < la: M1) */
+    cmp.l   CLA(%sp), %d1
     beq.s   2f
     blt.s   1f
-    or.l    #0x01000000, %d0
+    ori.l   #0x01000000, %d2
     bra.s   2f
-1:  or.l    #0x00010000, %d0
-2:  move.l  %d0, 20(%a3)
-    move.l  #0x100, %d0         /* upper_mask = P2 | (ub > ua: M1, ub < ua: P1) */
-    move.l  CUB(%a6), %d1
-    cmp.l   CUA(%a6), %d1
+1:  ori.l   #0x00010000, %d2
+2:  move.l  %d2, (%a3)+
+    move.l  #0x100, %d2         /* upper_mask = P2 | (ub > ua: M1, ub < ua: P1) */
+    cmp.l   CUA(%sp), %d0
     beq.s   2f
     blt.s   1f
-    or.l    #0x00010000, %d0
+    ori.l   #0x00010000, %d2
     bra.s   2f
-1:  or.l    #0x01000000, %d0
-2:  move.l  %d0, 24(%a3)
-    moveq   #0, %d0             /* ends: none when wrapping, M1 at c0, P1 at c1 */
+1:  ori.l   #0x01000000, %d2
+2:  move.l  %d2, (%a3)+
+    moveq   #0, %d2             /* ends: none when wrapping, M1 at c0, P1 at c1 */
     tst.b   396(%a0)
     bne.s   2f
-    move.l  CC(%a6), %d1
-    cmp.l   12(%a6), %d1
+    move.l  %a6, %d1
+    cmp.l   CARG+4(%sp), %d1
     bne.s   1f
-    move.l  #0x00010000, %d0
+    move.l  #0x00010000, %d2
     bra.s   2f
-1:  cmp.l   16(%a6), %d1
+1:  cmp.l   CARG+8(%sp), %d1
     bne.s   2f
-    move.l  #0x01000000, %d0
-2:  move.l  %d0, 28(%a3)
-    lea     32(%a3), %a3
-    addq.l  #1, CC(%a6)
+    move.l  #0x01000000, %d2
+2:  move.l  %d2, (%a3)+
+    addq.l  #1, %a6
     bra     .Lcol
 .Ldone:
-    movem.l (%sp)+, %d2-%d7/%a2-%a5
-    unlk    %a6
+    lea     CLOC(%sp), %sp
+    movem.l (%sp)+, %d2-%d7/%a3-%a6
     rts
-/* A chain at t on segment d0: d1 = t, a4 = the chain, d3 = 0 for the upper (a vertical
- * segment gives its larger end), 1 for the lower (its smaller end); value in d0, not yet
- * moved outward. Uses d0-d2 and a5. */
-.Lceval:
-    lea     (%a0,%d0.l*4), %a5
+/* Both chains at t (d1) on segment d0: the upper chain one unit outward in d0, the lower
+ * in d1 (a vertical segment gives the upper its larger end, the lower its smaller).
+ * Uses d2, a4 and a5. */
+.Lceval2:
+    lea     (%a0,%d0.l*4), %a5  /* &t[j]: upper[j] at 132, lower[j] at 264 */
     move.l  4(%a5), %d2
     sub.l   (%a5), %d2          /* tb - ta */
-    beq.s   1f
+    beq.s   5f
     sub.l   (%a5), %d1          /* t - ta */
-    lea     (%a4,%d0.l*4), %a5
-    move.l  4(%a5), %d0
-    sub.l   (%a5), %d0          /* vb - va */
+    move.l  136(%a5), %d0
+    sub.l   132(%a5), %d0       /* vb - va */
     muls.l  %d1, %d0
     divs.l  %d2, %d0            /* truncated, as fx::div */
-    add.l   (%a5), %d0
+    add.l   132(%a5), %d0
+    addq.l  #1, %d0
+    movea.l %d0, %a4
+    move.l  268(%a5), %d0
+    sub.l   264(%a5), %d0
+    muls.l  %d1, %d0
+    divs.l  %d2, %d0
+    add.l   264(%a5), %d0
+    subq.l  #1, %d0
+    move.l  %d0, %d1
+    move.l  %a4, %d0
     rts
-1:  lea     (%a4,%d0.l*4), %a5
-    move.l  (%a5), %d0
-    move.l  4(%a5), %d1
-    tst.l   %d3
-    bne.s   2f
+5:  move.l  132(%a5), %d0
+    move.l  136(%a5), %d1
     cmp.l   %d1, %d0
-    bge.s   3f
+    bge.s   6f
     move.l  %d1, %d0
-3:  rts
-2:  cmp.l   %d1, %d0
-    ble.s   3b
+6:  addq.l  #1, %d0
+    movea.l %d0, %a4
+    move.l  264(%a5), %d0
+    move.l  268(%a5), %d1
+    cmp.l   %d1, %d0
+    ble.s   7f
     move.l  %d1, %d0
+7:  subq.l  #1, %d0
+    move.l  %d0, %d1
+    move.l  %a4, %d0
     rts
 
 /* ---- C-space pair walk (crates/cspace's raster::walk; thesis ch. IV section 6) ----
