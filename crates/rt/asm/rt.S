@@ -1481,14 +1481,69 @@ __cspace_columns:
     addq.l  #1, %d7
 .endm
 
+/* WRUNS col, bp: column col's rows as breakpoints at bp(%a6) (first, the lower of
+ * first + min(lower_rows, rows) and first + min(upper_from, rows), the higher, first +
+ * rows, then 0x7fffffff) and its runs' counters 20 bytes on (none before, the lower
+ * chain's rows: ends | lower; between: all four, or ends | lower | upper where both chains
+ * cross; the upper chain's: ends | upper; none after), all four in a full column (rows
+ * 128). What raster::pieces paints, row by row. Uses d0-d6 and a2. */
+.macro WRUNS col, bp
+    lea     \bp(%a6), %a2
+    move.l  4(\col), %d0        /* first */
+    move.l  8(\col), %d1        /* rows */
+    move.l  %d0, (%a2)
+    move.l  12(\col), %d2       /* min(lower_rows, rows) */
+    cmp.l   %d1, %d2
+    bls.s   1f
+    move.l  %d1, %d2
+1:  move.l  16(\col), %d3       /* min(upper_from, rows) */
+    cmp.l   %d1, %d3
+    bls.s   1f
+    move.l  %d1, %d3
+1:  move.l  28(\col), %d4
+    move.l  %d4, %d5
+    or.l    20(\col), %d4       /* ends | lower */
+    or.l    24(\col), %d5       /* ends | upper */
+    move.l  #0x01010101, %d6    /* the interior */
+    cmp.l   %d3, %d2
+    bls.s   2f
+    exg     %d2, %d3            /* both chains cross the rows between */
+    move.l  %d4, %d6
+    or.l    24(\col), %d6
+2:  moveq   #127, %d4
+    cmp.l   %d1, %d4
+    bcc.s   3f
+    move.l  #0x01010101, %d4    /* a full column: all four throughout */
+    move.l  %d4, %d5
+    move.l  %d4, %d6
+    bra.s   4f
+3:  move.l  28(\col), %d4
+    or.l    20(\col), %d4
+4:  add.l   %d0, %d2
+    move.l  %d2, 4(%a2)
+    add.l   %d0, %d3
+    move.l  %d3, 8(%a2)
+    add.l   %d1, %d0
+    move.l  %d0, 12(%a2)
+    move.l  #0x7fffffff, 16(%a2)
+    clr.l   20(%a2)
+    move.l  %d4, 24(%a2)
+    move.l  %d6, 28(%a2)
+    move.l  %d5, 32(%a2)
+    clr.l   36(%a2)
+.endm
+
     .section .text.__cspace_walk, "ax"
     .globl __cspace_walk
     .set    WC, -4              /* column */
     .set    WHI, -8             /* last column */
-    .set    WBP, -40            /* eight breakpoints */
+    .set    WOB, -88            /* the old column's breakpoints (four, then past any row) */
+    .set    WOM, -68            /* the counters of its runs: before, three, after */
+    .set    WNB, -48            /* the new column's likewise */
+    .set    WNM, -28
     .set    WNEAR, 1            /* raster::NEAR_ROWS */
 __cspace_walk:
-    link    %a6, #-40
+    link    %a6, #-88
     movem.l %d2-%d7/%a2-%a5, -(%sp)
     move.l  32(%a6), %a3        /* next record */
     moveq   #0, %d7             /* records */
@@ -1563,44 +1618,36 @@ __cspace_walk:
     WREC    %a0, 2, 12
     bra     .Lwnext
 12:
-    /* the breakpoints of both: first, first + min(lower_rows, rows),
-     * first + min(upper_from, rows), first + rows */
-    lea     WBP(%a6), %a2
-    move.l  %a0, %a4
-    bsr     .Lwbreaks
-    move.l  %a1, %a4
-    bsr     .Lwbreaks
-    /* insertion sort of the eight */
-    lea     WBP(%a6), %a2
-    moveq   #1, %d4             /* i */
-6:  move.l  (%a2,%d4.l*4), %d0  /* key */
-    move.l  %d4, %d5            /* j */
-7:  tst.l   %d5
-    beq.s   8f
-    move.l  -4(%a2,%d5.l*4), %d1
-    cmp.l   %d0, %d1
-    ble.s   8f
-    move.l  %d1, (%a2,%d5.l*4)
-    subq.l  #1, %d5
-    bra.s   7b
-8:  move.l  %d0, (%a2,%d5.l*4)
-    addq.l  #1, %d4
-    moveq   #8, %d1
-    cmp.l   %d1, %d4
-    blt.s   6b
-    /* each interval [bp[i], bp[i + 1]) with its counters in both; a5: where this
-     * column's last run ended (none yet: not a row) */
-    move.l  #0x80000000, %a5
-    moveq   #0, %d4
-9:  move.l  (%a2,%d4.l*4), %d0  /* p */
-    move.l  4(%a2,%d4.l*4), %d6 /* q */
-    cmp.l   %d0, %d6
-    ble.s   10f
-    move.l  %a0, %a4
-    bsr     .Lwmask
-    move.l  %d1, %d5            /* old */
-    move.l  %a1, %a4
-    bsr     .Lwmask             /* d1: new */
+    /* each column's rows as three runs between four breakpoints (raster::pieces's runs:
+     * the lower chain's rows, the interior or the rows both chains cross, the upper
+     * chain's rows; all four counters throughout a full column), then both columns
+     * walked together, breakpoint by breakpoint */
+    WRUNS   %a0, WOB
+    WRUNS   %a1, WNB
+    lea     WOB(%a6), %a2       /* the old column's next breakpoint; its run's counters */
+    lea     WNB(%a6), %a4       /* 20 bytes on; the new column's likewise */
+    move.l  (%a2), %d0          /* p: the lower first row */
+    cmp.l   (%a4), %d0
+    ble.s   1f
+    move.l  (%a4), %d0
+1:  move.l  #0x80000000, %a5    /* where this column's last run ended (none yet) */
+    /* past every breakpoint at or below p */
+2:  cmp.l   (%a2), %d0
+    blt.s   3f
+    addq.l  #4, %a2
+    bra.s   2b
+3:  cmp.l   (%a4), %d0
+    blt.s   4f
+    addq.l  #4, %a4
+    bra.s   3b
+4:  move.l  (%a2), %d6          /* q: the next breakpoint of either */
+    cmp.l   (%a4), %d6
+    ble.s   5f
+    move.l  (%a4), %d6
+5:  cmp.l   #0x7fffffff, %d6
+    beq     .Lwnext             /* past both columns */
+    move.l  20(%a2), %d5        /* old */
+    move.l  20(%a4), %d1        /* new */
     cmp.l   %d1, %d5
     beq.s   10f
     move.l  %d5, %d2
@@ -1633,10 +1680,8 @@ __cspace_walk:
     move.l  %d1, (%a3)+
     addq.l  #1, %d7
     move.l  %d6, %a5
-10: addq.l  #1, %d4
-    moveq   #7, %d1
-    cmp.l   %d1, %d4
-    blt.s   9b
+10: move.l  %d6, %d0
+    bra.s   2b
 .Lwnext:
     addq.l  #1, WC(%a6)
     bra     .Lwcol
@@ -1647,54 +1692,6 @@ __cspace_walk:
     move.l  %d7, %d0
     movem.l (%sp)+, %d2-%d7/%a2-%a5
     unlk    %a6
-    rts
-/* The four breakpoints of column a4 to (a2)+. Uses d0-d2. */
-.Lwbreaks:
-    move.l  4(%a4), %d0         /* first */
-    move.l  8(%a4), %d1         /* rows */
-    move.l  %d0, (%a2)+
-    move.l  12(%a4), %d2
-    cmp.l   %d1, %d2
-    bls.s   1f
-    move.l  %d1, %d2
-1:  add.l   %d0, %d2
-    move.l  %d2, (%a2)+
-    move.l  16(%a4), %d2
-    cmp.l   %d1, %d2
-    bls.s   1f
-    move.l  %d1, %d2
-1:  add.l   %d0, %d2
-    move.l  %d2, (%a2)+
-    add.l   %d1, %d0
-    move.l  %d0, (%a2)+
-    rts
-/* The counters column a4 gives row d0 (raster::pieces's runs): 0 outside the column, all
- * four in a full one; else its end counters, plus the lower chain's below lower_rows, the
- * upper chain's from upper_from, or all four between. In d1; uses d2, d3. */
-.Lwmask:
-    move.l  %d0, %d2
-    sub.l   4(%a4), %d2         /* rel */
-    bmi.s   4f
-    cmp.l   8(%a4), %d2
-    bcc.s   4f                  /* rel >= rows */
-    moveq   #127, %d1
-    cmp.l   8(%a4), %d1
-    bcs.s   3f                  /* rows >= 128: all four */
-    move.l  28(%a4), %d1
-    moveq   #0, %d3
-    cmp.l   12(%a4), %d2
-    bcc.s   1f
-    or.l    20(%a4), %d1        /* rel < lower_rows */
-    moveq   #1, %d3
-1:  cmp.l   16(%a4), %d2
-    bcs.s   2f
-    or.l    24(%a4), %d1        /* rel >= upper_from */
-    moveq   #1, %d3
-2:  tst.l   %d3
-    bne.s   5f
-3:  move.l  #0x01010101, %d1
-5:  rts
-4:  moveq   #0, %d1
     rts
 
 /* ---- C-space image interpolation (crates/cspace's fill; thesis ch. IV section 5) ----
