@@ -297,12 +297,19 @@ const NO_COLUMN: Column = Column {
     ends: 0,
 };
 
-/// Whether two columns differ in any field. (A function of its own, with or-ed
-/// differences: the compiled field-by-field compare clobbered the condition codes on the
-/// 68k, docs/toolchain.md.)
+/// Whether two columns of one map column paint different counters: they differ in a
+/// field, and are not both full (a full column gives every row of the map column all four
+/// counters once, from whatever first row: near the elbow's circle an image's middle
+/// columns span more than a revolution of theta2 in both positions of a small move, and
+/// were erased and drawn again whole because their first rows moved). (A function of its
+/// own, with or-ed differences and the fullness as a mask: the compiled field-by-field
+/// compare clobbered the condition codes on the 68k, docs/toolchain.md.)
 #[inline(never)]
 fn differ(a: &Column, b: &Column) -> bool {
-    ((a.col ^ b.col)
+    // Rows are at most 128 (`CSPACE_SIDE`): bit 7 of both is set only when both are full.
+    const _: () = assert!(CSPACE_SIDE == 128);
+    let not_both_full = ((a.rows & b.rows) >> 7).wrapping_sub(1);
+    (((a.col ^ b.col)
         | (a.first ^ b.first) as u32
         | (a.rows ^ b.rows)
         | (a.lower_rows ^ b.lower_rows)
@@ -310,6 +317,7 @@ fn differ(a: &Column, b: &Column) -> bool {
         | (a.lower_mask ^ b.lower_mask)
         | (a.upper_mask ^ b.upper_mask)
         | (a.ends ^ b.ends))
+        & not_both_full)
         != 0
 }
 

@@ -308,6 +308,98 @@ proptest! {
     }
 }
 
+/// Near the elbow's circle a 2-inch obstacle's front image spans more than a revolution of
+/// theta2 in its middle columns, before and after a 1 mm move (the C-space bench's worst
+/// case): the differential update writes nothing in those columns although their first
+/// rows moved (each gives every row all four counters once), and the map is still what
+/// drawing the new images and erasing the old ones leaves.
+#[test]
+fn full_columns_whose_first_rows_moved_are_left_alone() {
+    /// A canvas that counts the pixels written in each map column.
+    struct Counting<'a> {
+        inner: raster::SliceCanvas<'a>,
+        per_col: [u32; 128],
+    }
+    impl raster::Canvas for Counting<'_> {
+        fn pixel(&mut self, i1: u32, i2: u32, mask: u32, op: Op) -> Flags {
+            self.per_col[i1 as usize] += 1;
+            self.inner.pixel(i1, i2, mask, op)
+        }
+        fn stripe(&mut self, i1: u32, mask: u32, op: Op) -> Flags {
+            self.inner.stripe(i1, mask, op)
+        }
+    }
+    let mut skipped = 0;
+    for mm in 236..=264 {
+        let disk = |x_um| Disk {
+            x_um,
+            y_um: 0,
+            r_um: 28_500,
+        };
+        let (old, new) = (
+            images(&disk(mm * 1000)).unwrap(),
+            images(&disk(mm * 1000 + 1000)).unwrap(),
+        );
+        // The map columns full in both images whose first rows differ.
+        let columns = |im: &Images| {
+            let mut v = Vec::new();
+            let c = raster::each_column(&im.front.unwrap(), |w| v.push(w));
+            (c.0, v)
+        };
+        let ((oc, o), (nc, n)) = (columns(&old), columns(&new));
+        let mut full_moved = Vec::new();
+        for (i, w) in n.iter().enumerate() {
+            let j = i as i32 + nc - oc;
+            if let Some(was) = usize::try_from(j).ok().and_then(|j| o.get(j)) {
+                if w[2] == 128 && was[2] == 128 && w[1] != was[1] {
+                    full_moved.push(w[0] as usize);
+                }
+            }
+        }
+        let mut h = Memory::default();
+        apply(&old, &mut h.canvas(), Op::Draw);
+        let mut want = h.clone();
+        let only = |im: &Images| Images {
+            stripe: None,
+            ..*im
+        };
+        apply(&only(&new), &mut want.canvas(), Op::Draw);
+        apply(&only(&old), &mut want.canvas(), Op::Erase);
+        let mut work = raster::PairWork::new();
+        let mut log = raster::RunLog::new();
+        let (mut of, mut or) = (old.front, old.rear);
+        let per_col = {
+            let mut c = Counting {
+                inner: h.canvas(),
+                per_col: [0; 128],
+            };
+            let (f, ok) = raster::pair(&mut of, &new.front, &mut c, Some(&mut log), &mut work);
+            assert!(ok && f == Flags::default());
+            assert_eq!(log.erase(&mut c), Flags::default());
+            c.per_col
+        };
+        let mut log = raster::RunLog::new();
+        let (f, ok) = raster::pair(
+            &mut or,
+            &new.rear,
+            &mut h.canvas(),
+            Some(&mut log),
+            &mut work,
+        );
+        assert!(ok && f == Flags::default());
+        assert_eq!(log.erase(&mut h.canvas()), Flags::default());
+        assert!(h.map == want.map, "the maps differ at {mm} mm");
+        for &c in &full_moved {
+            assert_eq!(per_col[c], 0, "{mm} mm: column {c} written");
+        }
+        skipped += full_moved.len();
+    }
+    assert!(
+        skipped > 20,
+        "only {skipped} full columns whose first rows moved"
+    );
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 

@@ -1593,13 +1593,18 @@ __cspace_walk:
     bne.s   4f
     WREC    %a1, 1, 24          /* the new image's alone */
     bra     .Lwnext
-4:  /* both: nothing when the columns are the same */
+4:  /* both: nothing when the columns are the same, or both full (every row all four
+     * counters once, whatever their first rows) */
     move.l  %a0, %a2
     move.l  %a1, %a5
     moveq   #7, %d1
 5:  cmpm.l  (%a2)+, (%a5)+
     dbne    %d1, 5b
     beq     .Lwnext
+    move.l  8(%a0), %d1
+    and.l   8(%a1), %d1
+    btst    #7, %d1
+    bne     .Lwnext
     /* columns whose first or last rows moved by more than WNEAR rows: redrawn whole
      * (fewer, longer runs than their difference) */
     move.l  4(%a1), %d0
