@@ -938,6 +938,7 @@ fn walk(w: &mut PairWork, oc: (i32, i32), nc: (i32, i32)) -> usize {
                     n += 1;
                 }
                 (Some(o), Some(k)) => {
+                    let o = revolved(&o, &k);
                     if !differ(&o, &k) {
                         continue;
                     }
@@ -988,12 +989,36 @@ fn walk(w: &mut PairWork, oc: (i32, i32), nc: (i32, i32)) -> usize {
 /// `WNEAR` in the runtime's `__cspace_walk`.
 pub const NEAR_ROWS: i32 = 1;
 
+/// A column whose ends moved further than [`NEAR_ROWS`] is still updated by its difference
+/// when they moved together by at most its rows and the old one's over 2^`NEAR_SHIFT`
+/// (long columns whose ends moved a little: their runs are shorter than both columns).
+/// `WSHIFT` in the runtime's `__cspace_walk`.
+pub const NEAR_SHIFT: u32 = 3;
+
 /// Whether columns `o` and `k` (both there) are within [`NEAR_ROWS`] of each other at both
 /// ends.
 fn near(o: &Column, k: &Column) -> bool {
-    let d0 = k.first - o.first;
-    let d1 = d0 + k.rows as i32 - o.rows as i32;
-    d0.abs() <= NEAR_ROWS && d1.abs() <= NEAR_ROWS
+    let d0 = (k.first - o.first).abs();
+    let d1 = (k.first + k.rows as i32 - o.first - o.rows as i32).abs();
+    (d0 <= NEAR_ROWS && d1 <= NEAR_ROWS) || d0 + d1 <= ((o.rows + k.rows) >> NEAR_SHIFT) as i32
+}
+
+/// Column `o` with its rows moved by the whole revolutions of theta2 (128 rows: the same
+/// pixels) that bring its first row nearest `k`'s, when both have rows (`o` as it is
+/// when either is [`NO_COLUMN`]): near the elbow's circle an image's columns can lie a
+/// revolution apart in theta2 after a small move, and compared unwrapped they were erased
+/// and drawn again whole. (Sign arithmetic, no compare: a function of its own for the
+/// 68k, docs/toolchain.md.)
+#[inline(never)]
+fn revolved(o: &Column, k: &Column) -> Column {
+    const _: () = assert!(CSPACE_SIDE == 128);
+    // 1 when both have rows (1..=128: the negation's sign bit), else 0.
+    let both = (o.rows.wrapping_neg() & k.rows.wrapping_neg()) >> 31;
+    let turns = ((k.first - o.first + 64) >> 7) * both as i32;
+    Column {
+        first: o.first + (turns << 7),
+        ..*o
+    }
 }
 
 /// The runs of rows where columns `o` (old) and `k` (new) of one map column differ, as
@@ -1171,8 +1196,8 @@ fn pair_slow<C: Canvas>(oc: (i32, i32), nc: (i32, i32), a: &mut Apply<'_, C>, w:
         let c = lo + i;
         i += 1;
         let PairWork { cols, cur, buf, .. } = &mut *w;
-        let ocol = column_at(&cols[0], oc, c);
         let ncol = column_at(&cols[1], nc, c);
+        let ocol = &revolved(column_at(&cols[0], oc, c), ncol);
         if !differ(ocol, ncol) {
             continue;
         }

@@ -1481,15 +1481,17 @@ __cspace_columns:
     addq.l  #1, %d7
 .endm
 
-/* WRUNS col, bp: column col's rows as breakpoints at bp(%a6) (first, the lower of
+/* WRUNS col, bp, shift: column col's rows, moved by shift (whole revolutions of theta2,
+ * the same pixels), as breakpoints at bp(%a6) (first, the lower of
  * first + min(lower_rows, rows) and first + min(upper_from, rows), the higher, first +
  * rows, then 0x7fffffff) and its runs' counters 20 bytes on (none before, the lower
  * chain's rows: ends | lower; between: all four, or ends | lower | upper where both chains
  * cross; the upper chain's: ends | upper; none after), all four in a full column (rows
  * 128). What raster::pieces paints, row by row. Uses d0-d6 and a2. */
-.macro WRUNS col, bp
+.macro WRUNS col, bp, shift
     lea     \bp(%a6), %a2
-    move.l  4(\col), %d0        /* first */
+    move.l  4(\col), %d0        /* first, moved by shift rows */
+    add.l   \shift, %d0
     move.l  8(\col), %d1        /* rows */
     move.l  %d0, (%a2)
     move.l  12(\col), %d2       /* min(lower_rows, rows) */
@@ -1542,6 +1544,7 @@ __cspace_columns:
     .set    WNB, -48            /* the new column's likewise */
     .set    WNM, -28
     .set    WNEAR, 1            /* raster::NEAR_ROWS */
+    .set    WSHIFT, 3           /* raster::NEAR_SHIFT */
 __cspace_walk:
     link    %a6, #-88
     movem.l %d2-%d7/%a2-%a5, -(%sp)
@@ -1605,20 +1608,40 @@ __cspace_walk:
     and.l   8(%a1), %d1
     btst    #7, %d1
     bne     .Lwnext
-    /* columns whose first or last rows moved by more than WNEAR rows: redrawn whole
-     * (fewer, longer runs than their difference) */
+    /* the old column's rows moved by the whole revolutions of theta2 (128 rows: the same
+     * pixels) that bring its first row nearest the new one's (a4: images near the elbow's
+     * circle lie a revolution apart in some columns after a small move) */
     move.l  4(%a1), %d0
     sub.l   4(%a0), %d0         /* first: new - old */
+    move.l  %d0, %d3
+    addi.l  #64, %d3
+    asr.l   #7, %d3
+    lsl.l   #7, %d3
+    movea.l %d3, %a4
+    sub.l   %d3, %d0
+    /* columns whose first or last rows moved by more than WNEAR rows, and together by
+     * more than the columns' rows >> WSHIFT, redrawn whole (fewer, longer runs than
+     * their difference) */
     move.l  %d0, %d1
     add.l   8(%a1), %d1
     sub.l   8(%a0), %d1         /* last: new - old */
-    addq.l  #WNEAR, %d0
-    moveq   #2 * WNEAR, %d2
+    tst.l   %d0                 /* |first|, |last| */
+    bpl.s   1f
+    neg.l   %d0
+1:  tst.l   %d1
+    bpl.s   1f
+    neg.l   %d1
+1:  moveq   #WNEAR, %d2
     cmp.l   %d2, %d0
-    bhi.s   11f                 /* unsigned: outside 0..=2 WNEAR */
-    addq.l  #WNEAR, %d1
+    bhi.s   2f
     cmp.l   %d2, %d1
-    bls.s   12f
+    bls.s   12f                 /* both within WNEAR */
+2:  add.l   %d1, %d0
+    move.l  8(%a0), %d2
+    add.l   8(%a1), %d2
+    lsr.l   #WSHIFT, %d2
+    cmp.l   %d2, %d0
+    bls.s   12f                 /* together within the rows >> WSHIFT */
 11: WREC    %a1, 1, 24          /* the new column whole, then the old one */
     WREC    %a0, 2, 12
     bra     .Lwnext
@@ -1627,8 +1650,8 @@ __cspace_walk:
      * the lower chain's rows, the interior or the rows both chains cross, the upper
      * chain's rows; all four counters throughout a full column), then both columns
      * walked together, breakpoint by breakpoint */
-    WRUNS   %a0, WOB
-    WRUNS   %a1, WNB
+    WRUNS   %a0, WOB, %a4
+    WRUNS   %a1, WNB, #0
     lea     WOB(%a6), %a2       /* the old column's next breakpoint; its run's counters */
     lea     WNB(%a6), %a4       /* 20 bytes on; the new column's likewise */
     move.l  (%a2), %d0          /* p: the lower first row */
