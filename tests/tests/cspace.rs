@@ -288,6 +288,53 @@ fn the_cspace_images_column_extents_match_the_host() {
     );
 }
 
+/// The image's `__cspace_same_shape` (which images' kept columns a move reuses) finds two
+/// images the same only when every vertex of every chain and the wrap flag are: one word
+/// changed anywhere, or the flag, parts them.
+#[test]
+fn the_cspace_images_shape_compare_sees_every_word() {
+    use sim_host::emu::EmuBoard;
+    use sim_host::image::Image;
+    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let id = BoardId::Cspace0;
+    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let routine = img.symbol("__cspace_same_shape").unwrap();
+    const A: u32 = 0xC0000;
+    const B: u32 = 0xC1000;
+    let shape = cspace::images(&random_disk(95, 1)).unwrap().front.unwrap();
+    let bytes = |s: &cspace::Shape| {
+        let mut v = Vec::new();
+        for w in s.theta1_u.iter().chain(&s.upper_u).chain(&s.lower_u) {
+            v.extend_from_slice(&w.to_be_bytes());
+        }
+        v.push(s.wraps as u8);
+        v
+    };
+    let a = bytes(&shape);
+    b.ram[A as usize..A as usize + a.len()].copy_from_slice(&a);
+    let mut same = |b: &mut EmuBoard, other: &[u8]| {
+        b.ram[B as usize..B as usize + other.len()].copy_from_slice(other);
+        let (ret, _) = b
+            .call(&mut global, routine, &[A, B], 1_000_000)
+            .expect("the routine returns");
+        ret
+    };
+    assert_eq!(same(&mut b, &a), 1, "an image and its copy");
+    // Each of the 99 words changed in its lowest bit, then in its highest, then the flag.
+    for word in 0..99 {
+        for bit in [0, 31] {
+            let mut other = a.clone();
+            other[4 * word + 3 - bit / 8] ^= 1 << (bit % 8);
+            assert_eq!(same(&mut b, &other), 0, "word {word} bit {bit} changed");
+        }
+    }
+    let mut other = a.clone();
+    other[396] ^= 1;
+    assert_eq!(same(&mut b, &other), 0, "the wrap flag changed");
+}
+
 /// The cspace image's differential move (its column extents and pair walk in assembly,
 /// through the probe `cspace_probe_move`) leaves the counters the host's draw-then-erase
 /// leaves, bit for bit: for random disks moved a little (0-3 mm, the moves the boards redraw
@@ -353,6 +400,58 @@ fn the_cspace_image_moves_images_like_draw_then_erase() {
         moved += 1;
     }
     assert!(moved > 100, "only {moved} moves had images");
+}
+
+/// Two moves on one board (`cspace_probe_move_twice`): the second takes the first's new
+/// images' columns from those the board kept instead of computing them, and the map is
+/// still, bit for bit, the host's image of the last disk.
+#[test]
+fn the_cspace_image_moves_again_from_the_columns_it_kept() {
+    use sim_host::emu::EmuBoard;
+    use sim_host::image::Image;
+    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let id = BoardId::Cspace0;
+    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let probe = img.symbol("cspace_probe_move_twice").unwrap();
+    let (mut moved, mut kept) = (0, 0);
+    for n in 0..60 {
+        let d0 = random_disk(96, n);
+        let step = random_disk(97, n);
+        let near = |d: cspace::Disk, k: i32| cspace::Disk {
+            x_um: d.x_um + step.x_um % (3_000 * k),
+            y_um: d.y_um + step.y_um % (3_000 * k),
+            r_um: d.r_um,
+        };
+        let (d1, d2) = (near(d0, 1), near(near(d0, 1), 2));
+        let (Ok(_), Ok(mid), Ok(last)) = (
+            cspace::images(&d0),
+            cspace::images(&d1),
+            cspace::images(&d2),
+        ) else {
+            continue;
+        };
+        global.iter_mut().for_each(|x| *x = 0);
+        let args = [d0, d1, d2].map(|d| [d.x_um, d.y_um, d.r_um]).concat();
+        let args: Vec<u32> = args.iter().map(|&v| v as u32).collect();
+        let (ret, _) = b
+            .call(&mut global, probe, &args, 400_000_000)
+            .expect("probe returns");
+        assert!(ret as i32 >= 0, "{d0:?} -> {d1:?} -> {d2:?}");
+        let mut host = cspace::Memory::default();
+        cspace::apply(&last, &mut host.canvas(), cspace::Op::Draw);
+        assert_map_is(&global, &host, &format!("{d0:?} -> {d1:?} -> {d2:?}"));
+        // The second move's old images are the first's new ones: each kept and taken.
+        let images = [mid.front, mid.rear].iter().filter(|s| s.is_some()).count();
+        assert_eq!(ret as usize, images, "images of {d1:?} kept and taken");
+        kept += ret;
+        moved += 1;
+    }
+    assert!(
+        moved > 40 && kept as usize >= moved,
+        "{moved} moves, {kept} kept"
+    );
 }
 
 /// The object table caught mid-publish is skipped, not a fault; a table left torn (a writer

@@ -730,9 +730,10 @@ impl Cursor {
     }
 }
 
-/// What a [`pair`] works in: both images' columns, the records of their walk and the two
-/// cursors the host's walk uses (15 KiB; given by the caller so that they are not arrays on `pair`'s own stack
-/// frame, which the 68k backend indexes wrongly, llvm/llvm-project#200984).
+/// What a [`pair`] works in: both images' columns, the records of their walk, the two
+/// cursors the host's walk uses, and the columns of the last [`KEPT`] new images (70 KiB;
+/// given by the caller so that they are not arrays on `pair`'s own stack frame, which the
+/// 68k backend indexes wrongly, llvm/llvm-project#200984).
 pub struct PairWork {
     /// The old and the new image's columns, written by each pair before it reads them
     /// (left uninitialised: see [`RunLog`]).
@@ -741,20 +742,106 @@ pub struct PairWork {
     recs: [MaybeUninit<Rec>; MAX_RECS],
     cur: [Cursor; 2],
     buf: [u32; 10],
+    /// New images' columns, kept for the pair that has them as its old image.
+    kept: [Kept; KEPT],
+    /// The slot the next image not already kept goes to (round robin).
+    next: usize,
+    /// Pairs whose old image's columns were kept (wrapping).
+    hits: u32,
+}
+
+/// Images whose columns a [`PairWork`] keeps: a job's new images are the next job's old
+/// ones on the same work-list entry, and a board serves up to six obstacles of two link-2
+/// images each.
+pub const KEPT: usize = 12;
+
+/// An image's columns kept from the pair that computed them: columns are a function of the
+/// image alone, so a pair whose old image is one kept copies them instead of computing them
+/// again (about 40,000 of a 2-inch obstacle's ~440,000 cycles at 200 mm).
+struct Kept {
+    /// Whether the rest holds an image (else it is unwritten memory).
+    valid: bool,
+    /// The image.
+    shape: MaybeUninit<Shape>,
+    /// Its columns' range (unwrapped, inclusive) and the columns from its first.
+    range: MaybeUninit<(i32, i32)>,
+    cols: [MaybeUninit<Column>; MAX_COLUMNS],
+}
+
+impl Kept {
+    const EMPTY: Kept = Kept {
+        valid: false,
+        shape: MaybeUninit::uninit(),
+        range: MaybeUninit::uninit(),
+        cols: [const { MaybeUninit::uninit() }; MAX_COLUMNS],
+    };
+}
+
+/// Whether images `a` and `b` are the same. On the 68020 `__cspace_same_shape` in the
+/// runtime's assembly, a `CMPM.L` loop over the vertices (the derived compare went through
+/// a byte-wise `memcmp`, 26,000 cycles of a job at 200 mm, and a compiled word loop had
+/// its exit branch test a register copy's flags, docs/toolchain.md class 1).
+#[inline(never)]
+fn same_shape(a: &Shape, b: &Shape) -> bool {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __cspace_same_shape(a: *const Shape, b: *const Shape) -> u32;
+        }
+        // SAFETY: both point at whole shapes; the routine only reads them.
+        unsafe { __cspace_same_shape(a, b) != 0 }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        a == b
+    }
+}
+
+/// Copies columns `src` into `dst` (as long): on the 68020 the runtime's `MOVE.L` loop
+/// (`__vme_read_words`, a plain word copy; `memcpy` spent ~2.5 cycles a byte).
+#[inline(never)]
+fn copy_columns(dst: &mut [MaybeUninit<Column>], src: &[MaybeUninit<Column>]) {
+    debug_assert_eq!(dst.len(), src.len());
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __vme_read_words(src: *const u32, dst: *mut u32, n: u32);
+        }
+        const WORDS: usize = core::mem::size_of::<Column>() / 4;
+        // SAFETY: both slices hold `src.len()` columns of `WORDS` words each (`Column` is
+        // `repr(C)` of u32 and i32 fields, so 4-aligned); the routine copies them in order.
+        unsafe {
+            __vme_read_words(
+                src.as_ptr().cast(),
+                dst.as_mut_ptr().cast(),
+                (src.len() * WORDS) as u32,
+            )
+        }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    dst.copy_from_slice(src);
 }
 
 impl PairWork {
-    /// Makes `*p` usable without writing its columns and records
+    /// Makes `*p` usable without writing its columns, records and kept images
     /// ([`crate::worklist::Scratch::init`]).
     ///
     /// # Safety
     /// `p` is valid for writes of a `PairWork`.
     pub(crate) unsafe fn init(p: *mut PairWork) {
         use core::ptr::addr_of_mut;
-        // SAFETY: by the caller; the columns and records are `MaybeUninit`.
+        // SAFETY: by the caller; the columns, records and kept images but their flags are
+        // `MaybeUninit`.
         unsafe {
             addr_of_mut!((*p).cur).write([Cursor::NONE, Cursor::NONE]);
             addr_of_mut!((*p).buf).write([0; 10]);
+            addr_of_mut!((*p).next).write(0);
+            addr_of_mut!((*p).hits).write(0);
+            let mut i = 0;
+            while i < KEPT {
+                addr_of_mut!((*p).kept[i].valid).write(false);
+                i += 1;
+            }
         }
     }
     /// Empty.
@@ -764,7 +851,63 @@ impl PairWork {
             recs: [const { MaybeUninit::uninit() }; MAX_RECS],
             cur: [Cursor::NONE, Cursor::NONE],
             buf: [0; 10],
+            kept: [const { Kept::EMPTY }; KEPT],
+            next: 0,
+            hits: 0,
         }
+    }
+
+    /// How many pairs found their old image's columns kept (wrapping): for the benches and
+    /// the tests.
+    pub fn hits(&self) -> u32 {
+        self.hits
+    }
+
+    /// The slot keeping image `s`, or [`KEPT`] when none does.
+    #[inline(never)]
+    fn kept_slot(&self, s: &Shape) -> usize {
+        let mut i = 0;
+        while i < KEPT {
+            let k = &self.kept[i];
+            // SAFETY: a valid slot's shape was written with its flag.
+            if k.valid && same_shape(unsafe { k.shape.assume_init_ref() }, s) {
+                return i;
+            }
+            i += 1;
+        }
+        KEPT
+    }
+
+    /// Copies slot `i`'s columns into the old image's (`cols[0]`); returns their range.
+    #[inline(never)]
+    fn take_kept(&mut self, i: usize) -> (i32, i32) {
+        let PairWork { cols, kept, .. } = self;
+        let k = &kept[i];
+        // SAFETY: a valid slot's range and columns were written with its flag.
+        let range = unsafe { k.range.assume_init() };
+        let n = (range.1 - range.0 + 1) as usize;
+        copy_columns(&mut cols[0][..n], &k.cols[..n]);
+        range
+    }
+
+    /// Keeps the new image `s` and its columns (`cols[1]`, range `nc`) in slot `i`, or in
+    /// the next slot round when `i` is [`KEPT`].
+    #[inline(never)]
+    fn keep(&mut self, s: &Shape, nc: (i32, i32), i: usize) {
+        let i = if i < KEPT {
+            i
+        } else {
+            let v = self.next;
+            self.next = (v + 1) % KEPT;
+            v
+        };
+        let PairWork { cols, kept, .. } = self;
+        let k = &mut kept[i];
+        let n = (nc.1 - nc.0 + 1) as usize;
+        copy_columns(&mut k.cols[..n], &cols[1][..n]);
+        k.shape.write(*s);
+        k.range.write(nc);
+        k.valid = true;
     }
 }
 
@@ -1143,16 +1286,37 @@ pub fn pair<C: Canvas>(
     log: Option<&mut RunLog>,
     w: &mut PairWork,
 ) -> (Flags, bool) {
+    // The old image's columns from the pair that drew it, when kept and not moved by
+    // whole revolutions below.
+    let mut slot = match old {
+        Some(o) => w.kept_slot(o),
+        None => KEPT,
+    };
     if let (Some(o), Some(n)) = (old.as_mut(), new) {
+        let was = o.theta1_u[0];
         align(o, n);
+        if o.theta1_u[0] != was {
+            slot = KEPT;
+        }
     }
     let start = log.as_deref().map_or(0, RunLog::len);
     let (oc, nc) = (columns(old), columns(new));
     if let Some(s) = old {
-        all_columns(s, oc.0, oc.1, &mut w.cols[0]);
+        if slot < KEPT {
+            let kept = w.take_kept(slot);
+            debug_assert_eq!(kept, oc);
+            w.hits = w.hits.wrapping_add(1);
+        } else {
+            all_columns(s, oc.0, oc.1, &mut w.cols[0]);
+        }
     }
     if let Some(s) = new {
         all_columns(s, nc.0, nc.1, &mut w.cols[1]);
+        // Kept for the next job on this entry (in the old image's slot, which it replaces);
+        // the second half (no log) only computes again what the first had.
+        if log.is_some() {
+            w.keep(s, nc, slot);
+        }
     }
     let n = walk(w, oc, nc);
     let mut a = Apply::new(canvas, log);
@@ -1214,5 +1378,68 @@ fn pair_slow<C: Canvas>(oc: (i32, i32), nc: (i32, i32), a: &mut Apply<'_, C>, w:
         walk_runs(ocol, ncol, cur, buf, &mut |r, rows, up, down| {
             a.run(col, r, rows, up, down)
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{images, Disk, Memory};
+
+    /// An obstacle moved step by step, a pair each step sharing one `PairWork`: from the
+    /// second step on each pair's old image is found kept, its kept columns are those
+    /// computed afresh, and twelve other images passing through the round robin meanwhile
+    /// evict it only once they fill every slot.
+    #[test]
+    fn a_moved_images_columns_are_kept_for_its_next_move() {
+        let mut w = PairWork::new();
+        let mut h = Memory::default();
+        let disk = |k: i32| Disk {
+            x_um: 150_000 + 1_000 * k,
+            y_um: 40_000,
+            r_um: 28_500,
+        };
+        let mut was = images(&disk(0)).unwrap().front;
+        for k in 1..6 {
+            let now = images(&disk(k)).unwrap().front;
+            let slot = w.kept_slot(was.as_ref().unwrap());
+            assert_eq!(slot < KEPT, k > 1, "step {k}: kept slot {slot}");
+            if slot < KEPT {
+                let oc = columns(&was);
+                let got = w.take_kept(slot);
+                assert_eq!(got, oc);
+                let mut fresh = PairWork::new();
+                all_columns(was.as_ref().unwrap(), oc.0, oc.1, &mut fresh.cols[1]);
+                for i in 0..(oc.1 - oc.0 + 1) as usize {
+                    // SAFETY: both were written over the range.
+                    let (a, b) =
+                        unsafe { (w.cols[0][i].assume_init(), fresh.cols[1][i].assume_init()) };
+                    assert_eq!(a, b, "step {k}, column {i}");
+                }
+            }
+            let mut log = RunLog::new();
+            pair(
+                &mut was.clone(),
+                &now,
+                &mut h.canvas(),
+                Some(&mut log),
+                &mut w,
+            );
+            was = now;
+        }
+        // Other images fill the slots round: the last one kept survives eleven more, not
+        // twelve.
+        let last = was.unwrap();
+        for k in 0..KEPT as i32 {
+            let other = images(&disk(100 + 3 * k)).unwrap().front;
+            let mut log = RunLog::new();
+            assert!(w.kept_slot(&last) < KEPT, "evicted after {k} others");
+            pair(&mut None, &other, &mut h.canvas(), Some(&mut log), &mut w);
+        }
+        assert_eq!(
+            w.kept_slot(&last),
+            KEPT,
+            "still kept after every slot was taken"
+        );
     }
 }

@@ -311,6 +311,11 @@ impl Scratch {
             logged: [false; 2 * MAX_COVER],
         }
     }
+    /// How many link-2 images' columns the jobs took from those kept from earlier jobs
+    /// instead of computing them (wrapping; [`raster::PairWork::hits`]).
+    pub fn kept_hits(&self) -> u32 {
+        self.pair.hits()
+    }
     /// Initialises `slot` in place and returns it: every field a job reads before it writes
     /// it, and not the large work areas ([`RunLog`], [`PairWork`]'s columns and records),
     /// which stay as they were. For a board's memory outside `.bss` (the image's `.uninit`

@@ -1449,6 +1449,27 @@ __cspace_columns:
     move.l  %a4, %d0
     rts
 
+/* ---- C-space image compare (crates/cspace's raster::same_shape) ----
+ * u32 __cspace_same_shape(const Shape *a, const Shape *b): 1 when the two images
+ * (cspace::Shape, repr(C): theta1, upper and lower, 33 longs each, from 0; the wraps byte
+ * at 396) are the same, else 0; the first vertices first, so that images of other
+ * obstacles part at once. */
+    .section .text.__cspace_same_shape, "ax"
+    .globl __cspace_same_shape
+__cspace_same_shape:
+    movea.l 4(%sp), %a0
+    movea.l 8(%sp), %a1
+    moveq   #0, %d0
+    move.b  396(%a0), %d1
+    cmp.b   396(%a1), %d1
+    bne.s   9f
+    moveq   #98, %d1            /* 99 longs */
+1:  cmpm.l  (%a0)+, (%a1)+
+    dbne    %d1, 1b
+    bne.s   9f
+    moveq   #1, %d0
+9:  rts
+
 /* ---- C-space pair walk (crates/cspace's raster::walk; thesis ch. IV section 6) ----
  * u32 __cspace_walk(const Column *old, i32 oc0, i32 oc1, const Column *new, i32 nc0,
  *                   i32 nc1, Rec *out, u32 cap):
