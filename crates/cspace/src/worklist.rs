@@ -292,6 +292,33 @@ pub struct Scratch {
     old_stripes: [Option<Stripe>; MAX_COVER],
     /// Per cover disk and link-2 image (front, rear): its decrements are in the log.
     logged: [bool; 2 * MAX_COVER],
+    /// The images of the last [`KEPT_IMAGES`] new cover disks, for the jobs that have them
+    /// as their old ones.
+    kept: [KeptImages; KEPT_IMAGES],
+    /// The slot the next disk not already kept goes to (round robin).
+    next_kept: usize,
+}
+
+/// Cover disks whose images a board keeps: a job's new disks are the next job's old ones
+/// on the same entry (six obstacles, most of them one disk each).
+pub const KEPT_IMAGES: usize = 8;
+
+/// A disk's images kept from the job that computed them: a function of the disk alone, so
+/// a job whose old disk is kept copies them instead of interpolating them again (~25,000
+/// cycles of a 2-inch obstacle's job at 200 mm on the 68020).
+struct KeptImages {
+    /// Whether `disk` and `images` hold a disk's images (else unwritten memory).
+    valid: bool,
+    disk: core::mem::MaybeUninit<Disk>,
+    images: core::mem::MaybeUninit<Images>,
+}
+
+impl KeptImages {
+    const EMPTY: KeptImages = KeptImages {
+        valid: false,
+        disk: core::mem::MaybeUninit::uninit(),
+        images: core::mem::MaybeUninit::uninit(),
+    };
 }
 
 impl Scratch {
@@ -309,6 +336,8 @@ impl Scratch {
             old: NO,
             old_stripes: [None; MAX_COVER],
             logged: [false; 2 * MAX_COVER],
+            kept: [const { KeptImages::EMPTY }; KEPT_IMAGES],
+            next_kept: 0,
         }
     }
     /// How many link-2 images' columns the jobs took from those kept from earlier jobs
@@ -330,7 +359,7 @@ impl Scratch {
         let p = slot.as_mut_ptr();
         // SAFETY: every field that is not (made of) `MaybeUninit` is written here before
         // the reference is made: the log's and the pair work's own fields, the images, the
-        // stripes and the flags.
+        // stripes, the flags and the kept images' flags.
         unsafe {
             RunLog::init(addr_of_mut!((*p).log));
             PairWork::init(addr_of_mut!((*p).pair));
@@ -338,6 +367,12 @@ impl Scratch {
             addr_of_mut!((*p).old).write(NO);
             addr_of_mut!((*p).old_stripes).write([None; MAX_COVER]);
             addr_of_mut!((*p).logged).write([false; 2 * MAX_COVER]);
+            addr_of_mut!((*p).next_kept).write(0);
+            let mut i = 0;
+            while i < KEPT_IMAGES {
+                addr_of_mut!((*p).kept[i].valid).write(false);
+                i += 1;
+            }
             slot.assume_init_mut()
         }
     }
@@ -357,6 +392,68 @@ fn images_of(disks: &([Disk; MAX_COVER], usize), i: usize, out: &mut Images) {
             *out = im;
         }
     }
+}
+
+impl Scratch {
+    /// The slot keeping disk `d`'s images, or [`KEPT_IMAGES`] when none does.
+    #[inline(never)]
+    fn kept_slot(&self, d: &Disk) -> usize {
+        let mut i = 0;
+        while i < KEPT_IMAGES {
+            let k = &self.kept[i];
+            // SAFETY: a valid slot's disk was written with its flag.
+            if k.valid && same_disk(unsafe { k.disk.assume_init_ref() }, d) {
+                return i;
+            }
+            i += 1;
+        }
+        KEPT_IMAGES
+    }
+
+    /// The images of old cover disk `i` of `disks` (none past `n`) into `self.old`: copied
+    /// when kept, else computed. Returns the slot that kept them ([`KEPT_IMAGES`]: none).
+    #[inline(never)]
+    fn old_images(&mut self, disks: &([Disk; MAX_COVER], usize), i: usize) -> usize {
+        if i < disks.1 {
+            let slot = self.kept_slot(&disks.0[i]);
+            if slot < KEPT_IMAGES {
+                // SAFETY: a valid slot's images were written with its flag.
+                self.old = unsafe { self.kept[slot].images.assume_init() };
+                return slot;
+            }
+        }
+        images_of(disks, i, &mut self.old);
+        KEPT_IMAGES
+    }
+
+    /// Keeps `self.new`, the images of new cover disk `i` of `disks` (when it has some), in
+    /// `slot` (the old disk's, which it replaces), or the next slot round when `slot` is
+    /// [`KEPT_IMAGES`].
+    #[inline(never)]
+    fn keep_new(&mut self, disks: &([Disk; MAX_COVER], usize), i: usize, slot: usize) {
+        if i >= disks.1 {
+            return;
+        }
+        let slot = if slot < KEPT_IMAGES {
+            slot
+        } else {
+            let v = self.next_kept;
+            self.next_kept = (v + 1) % KEPT_IMAGES;
+            v
+        };
+        let k = &mut self.kept[slot];
+        k.disk.write(disks.0[i]);
+        k.images.write(self.new);
+        k.valid = true;
+    }
+}
+
+/// Whether disks `a` and `b` are the same, by their words' differences or-ed (a compiled
+/// field-by-field compare feeds the 68k's branch through register copies,
+/// docs/toolchain.md class 1).
+#[inline(never)]
+fn same_disk(a: &Disk, b: &Disk) -> bool {
+    ((a.x_um ^ b.x_um) | (a.y_um ^ b.y_um) | (a.r_um ^ b.r_um)) == 0
 }
 
 /// Moves the images of disk `old` (drawn) to those of disk `new` in global RAM as a job
@@ -409,7 +506,8 @@ fn update<B: GlobalBus + ?Sized>(
     sc.log.truncate(0);
     for i in 0..pairs {
         images_of(new, i, &mut sc.new);
-        images_of(&old, i, &mut sc.old);
+        let slot = sc.old_images(&old, i);
+        sc.keep_new(new, i, slot);
         canvas.mark();
         if let Some(s) = &sc.new.stripe {
             f.merge(raster::stripe(s, &mut canvas, Op::Draw));
@@ -750,4 +848,60 @@ fn job<B: GlobalBus + ?Sized>(
         Err(err) => out.error = Some(err),
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A job's new disks' images are found for the next job that has them as its old disks
+    /// (and are those `images` computes), a disk differing in any word is not, and the
+    /// round robin evicts a kept disk only once every slot has been taken since.
+    #[test]
+    fn old_disks_images_are_taken_from_the_kept_ones() {
+        let mut sc = Box::new(Scratch::new());
+        let disk = |x_um, r_um| Disk {
+            x_um,
+            y_um: -60_000,
+            r_um,
+        };
+        let one = |d: Disk| {
+            let mut v = [d; MAX_COVER];
+            v[1] = disk(0, 0);
+            (v, 1)
+        };
+        let (a, b) = (one(disk(200_000, 28_500)), one(disk(201_000, 28_500)));
+        images_of(&b, 0, &mut sc.new);
+        assert_eq!(sc.old_images(&a, 0), KEPT_IMAGES, "nothing kept yet");
+        sc.keep_new(&b, 0, KEPT_IMAGES);
+        assert_eq!(sc.old, images(&a.0[0]).unwrap());
+        // The next job: b is its old disk.
+        let slot = sc.old_images(&b, 0);
+        assert!(slot < KEPT_IMAGES);
+        assert_eq!(sc.old, images(&b.0[0]).unwrap());
+        // Not for a disk one word away, nor past the disks given.
+        for d in [
+            disk(201_001, 28_500),
+            Disk {
+                y_um: -60_001,
+                ..b.0[0]
+            },
+            disk(201_000, 28_501),
+        ] {
+            assert_eq!(sc.old_images(&one(d), 0), KEPT_IMAGES, "{d:?}");
+        }
+        assert_eq!(sc.old_images(&(b.0, 0), 0), KEPT_IMAGES);
+        assert_eq!(sc.old, Images::default());
+        // Others round: b's slot is taken only after every other one.
+        for k in 0..KEPT_IMAGES as i32 {
+            assert!(
+                sc.kept_slot(&b.0[0]) < KEPT_IMAGES,
+                "evicted after {k} others"
+            );
+            let c = one(disk(100_000 + 5_000 * k, 28_500));
+            images_of(&c, 0, &mut sc.new);
+            sc.keep_new(&c, 0, KEPT_IMAGES);
+        }
+        assert_eq!(sc.kept_slot(&b.0[0]), KEPT_IMAGES);
+    }
 }
