@@ -100,6 +100,11 @@ pub extern "C" fn cspace_probe_draw(x_um: i32, y_um: i32, r_um: i32) -> i32 {
     0
 }
 
+/// The probes' job memory (never the board's: `main` has its own), initialised by each
+/// probe call.
+#[link_section = ".uninit.cspace_probe_scratch"]
+static mut PROBE_SCRATCH: MaybeUninit<Scratch> = MaybeUninit::uninit();
+
 /// Test probe (never called by the board): draws the images of disk (`x0`, `y0`, `r0`) into
 /// the map and stripe layer in global RAM, then moves them to disk (`x1`, `y1`, `r1`) and
 /// on to (`x2`, `y2`, `r2`) as two jobs of one board do (the second takes the first's new
@@ -119,19 +124,17 @@ pub extern "C" fn cspace_probe_move_twice(
     y2: i32,
     r2: i32,
 ) -> i32 {
-    #[link_section = ".uninit.cspace_probe_scratch"]
-    static mut PROBE_SCRATCH2: MaybeUninit<Scratch> = MaybeUninit::uninit();
     let disk = |x_um, y_um, r_um| cspace::Disk { x_um, y_um, r_um };
     let (d0, d1, d2) = (disk(x0, y0, r0), disk(x1, y1, r1), disk(x2, y2, r2));
     let Ok(im) = cspace::images(&d0) else {
         return -1;
     };
-    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the probe
-    // is the only code that names PROBE_SCRATCH2.
+    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the
+    // probes are the only code that names PROBE_SCRATCH, one call at a time.
     let (mut g, sc) = unsafe {
         (
             MmioGlobal::new(),
-            Scratch::init(&mut *core::ptr::addr_of_mut!(PROBE_SCRATCH2)),
+            Scratch::init(&mut *core::ptr::addr_of_mut!(PROBE_SCRATCH)),
         )
     };
     cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
@@ -157,8 +160,6 @@ pub extern "C" fn cspace_probe_move_twice(
 #[no_mangle]
 #[link_section = ".text.probe.cspace_move"]
 pub extern "C" fn cspace_probe_move(x0: i32, y0: i32, r0: i32, x1: i32, y1: i32, r1: i32) -> i32 {
-    #[link_section = ".uninit.cspace_probe_scratch"]
-    static mut PROBE_SCRATCH: MaybeUninit<Scratch> = MaybeUninit::uninit();
     let old = cspace::Disk {
         x_um: x0,
         y_um: y0,
@@ -172,8 +173,8 @@ pub extern "C" fn cspace_probe_move(x0: i32, y0: i32, r0: i32, x1: i32, y1: i32,
     let Ok(im) = cspace::images(&old) else {
         return -1;
     };
-    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the probe
-    // is the only code that names PROBE_SCRATCH.
+    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the
+    // probes are the only code that names PROBE_SCRATCH, one call at a time.
     let (mut g, sc) = unsafe {
         (
             MmioGlobal::new(),
