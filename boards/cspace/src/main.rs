@@ -105,11 +105,57 @@ pub extern "C" fn cspace_probe_draw(x_um: i32, y_um: i32, r_um: i32) -> i32 {
 #[link_section = ".uninit.cspace_probe_scratch"]
 static mut PROBE_SCRATCH: MaybeUninit<Scratch> = MaybeUninit::uninit();
 
-/// Test probe (never called by the board): draws the images of disk (`x0`, `y0`, `r0`) into
-/// the map and stripe layer in global RAM, then moves them to disk (`x1`, `y1`, `r1`) and
-/// on to (`x2`, `y2`, `r2`) as two jobs of one board do (the second takes the first's new
-/// images' columns from those it kept). Returns how many images' columns were kept and
-/// taken, or -1 when a disk has no images.
+/// The move probes' work: the images of `d0` drawn into the map and stripe layer in global
+/// RAM, then moved to `d1` and, given `d2`, on to it, as jobs of one board do
+/// (`cspace::worklist::move_disk`: the differential update with this image's assembly).
+/// Returns how many images' columns were taken from those kept, or -1 when a disk has no
+/// images.
+#[inline(never)]
+fn probe_moves(d0: &cspace::Disk, d1: &cspace::Disk, d2: Option<&cspace::Disk>) -> i32 {
+    let Ok(im) = cspace::images(d0) else {
+        return -1;
+    };
+    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the
+    // probes are the only code that names PROBE_SCRATCH, one call at a time.
+    let (mut g, sc) = unsafe {
+        (
+            MmioGlobal::new(),
+            Scratch::init(&mut *core::ptr::addr_of_mut!(PROBE_SCRATCH)),
+        )
+    };
+    cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
+    if !matches!(
+        cspace::worklist::move_disk(&mut g, d0, d1, sc),
+        Ok((_, None))
+    ) {
+        return -1;
+    }
+    if let Some(d2) = d2 {
+        if !matches!(
+            cspace::worklist::move_disk(&mut g, d1, d2, sc),
+            Ok((_, None))
+        ) {
+            return -1;
+        }
+    }
+    sc.kept_hits() as i32
+}
+
+/// Test probe (never called by the board): draws the images of disk (`x0`, `y0`, `r0`),
+/// then moves them to disk (`x1`, `y1`, `r1`) as a job does ([`probe_moves`]). Returns 0,
+/// or -1 when a disk has no images.
+#[no_mangle]
+#[link_section = ".text.probe.cspace_move"]
+pub extern "C" fn cspace_probe_move(x0: i32, y0: i32, r0: i32, x1: i32, y1: i32, r1: i32) -> i32 {
+    let disk = |x_um, y_um, r_um| cspace::Disk { x_um, y_um, r_um };
+    probe_moves(&disk(x0, y0, r0), &disk(x1, y1, r1), None).min(0)
+}
+
+/// Test probe (never called by the board): draws the images of disk (`x0`, `y0`, `r0`),
+/// moves them to disk (`x1`, `y1`, `r1`) and on to (`x2`, `y2`, `r2`) as two jobs of one
+/// board do ([`probe_moves`]: the second takes the first's new images' columns from those
+/// it kept). Returns how many images' columns were kept and taken, or -1 when a disk has
+/// no images.
 #[no_mangle]
 #[link_section = ".text.probe.cspace_move_twice"]
 #[allow(clippy::too_many_arguments)]
@@ -125,65 +171,9 @@ pub extern "C" fn cspace_probe_move_twice(
     r2: i32,
 ) -> i32 {
     let disk = |x_um, y_um, r_um| cspace::Disk { x_um, y_um, r_um };
-    let (d0, d1, d2) = (disk(x0, y0, r0), disk(x1, y1, r1), disk(x2, y2, r2));
-    let Ok(im) = cspace::images(&d0) else {
-        return -1;
-    };
-    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the
-    // probes are the only code that names PROBE_SCRATCH, one call at a time.
-    let (mut g, sc) = unsafe {
-        (
-            MmioGlobal::new(),
-            Scratch::init(&mut *core::ptr::addr_of_mut!(PROBE_SCRATCH)),
-        )
-    };
-    cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
-    if !matches!(
-        cspace::worklist::move_disk(&mut g, &d0, &d1, sc),
-        Ok((_, None))
-    ) {
-        return -1;
-    }
-    if !matches!(
-        cspace::worklist::move_disk(&mut g, &d1, &d2, sc),
-        Ok((_, None))
-    ) {
-        return -1;
-    }
-    sc.kept_hits() as i32
-}
-
-/// Test probe (never called by the board): draws the images of disk (`x0`, `y0`, `r0`) into
-/// the map and stripe layer in global RAM, then moves them to disk (`x1`, `y1`, `r1`) as a
-/// job does (`cspace::worklist::move_disk`: the differential update with this image's
-/// assembly). Returns 0, or -1 when a disk has no images.
-#[no_mangle]
-#[link_section = ".text.probe.cspace_move"]
-pub extern "C" fn cspace_probe_move(x0: i32, y0: i32, r0: i32, x1: i32, y1: i32, r1: i32) -> i32 {
-    let old = cspace::Disk {
-        x_um: x0,
-        y_um: y0,
-        r_um: r0,
-    };
-    let new = cspace::Disk {
-        x_um: x1,
-        y_um: y1,
-        r_um: r1,
-    };
-    let Ok(im) = cspace::images(&old) else {
-        return -1;
-    };
-    // SAFETY: only ever called on an emulated board, where global RAM is mapped; the
-    // probes are the only code that names PROBE_SCRATCH, one call at a time.
-    let (mut g, sc) = unsafe {
-        (
-            MmioGlobal::new(),
-            Scratch::init(&mut *core::ptr::addr_of_mut!(PROBE_SCRATCH)),
-        )
-    };
-    cspace::apply(&im, &mut cspace::BusCanvas(&mut g), cspace::Op::Draw);
-    match cspace::worklist::move_disk(&mut g, &old, &new, sc) {
-        Ok((_, None)) => 0,
-        _ => -1,
-    }
+    probe_moves(
+        &disk(x0, y0, r0),
+        &disk(x1, y1, r1),
+        Some(&disk(x2, y2, r2)),
+    )
 }

@@ -777,6 +777,32 @@ impl Kept {
     };
 }
 
+/// The first of slots `0..n` for which `hit` holds, or `n`: the lookup of what a
+/// [`PairWork`] or a job's `worklist::Scratch` keeps.
+#[inline(always)]
+pub(crate) fn find_slot(n: usize, mut hit: impl FnMut(usize) -> bool) -> usize {
+    let mut i = 0;
+    while i < n {
+        if hit(i) {
+            return i;
+        }
+        i += 1;
+    }
+    n
+}
+
+/// Where a new thing to keep goes among `n` slots: `slot` when it is one (the old thing's,
+/// which the new one replaces), else the round robin's `next`, advanced.
+#[inline(always)]
+pub(crate) fn kept_target(slot: usize, next: &mut usize, n: usize) -> usize {
+    if slot < n {
+        return slot;
+    }
+    let v = *next;
+    *next = (v + 1) % n;
+    v
+}
+
 /// Whether images `a` and `b` are the same. On the 68020 `__cspace_same_shape` in the
 /// runtime's assembly, a `CMPM.L` loop over the vertices (the derived compare went through
 /// a byte-wise `memcmp`, 26,000 cycles of a job at 200 mm, and a compiled word loop had
@@ -866,16 +892,11 @@ impl PairWork {
     /// The slot keeping image `s`, or [`KEPT`] when none does.
     #[inline(never)]
     fn kept_slot(&self, s: &Shape) -> usize {
-        let mut i = 0;
-        while i < KEPT {
+        find_slot(KEPT, |i| {
             let k = &self.kept[i];
             // SAFETY: a valid slot's shape was written with its flag.
-            if k.valid && same_shape(unsafe { k.shape.assume_init_ref() }, s) {
-                return i;
-            }
-            i += 1;
-        }
-        KEPT
+            k.valid && same_shape(unsafe { k.shape.assume_init_ref() }, s)
+        })
     }
 
     /// Copies slot `i`'s columns into the old image's (`cols[0]`); returns their range.
@@ -894,13 +915,7 @@ impl PairWork {
     /// the next slot round when `i` is [`KEPT`].
     #[inline(never)]
     fn keep(&mut self, s: &Shape, nc: (i32, i32), i: usize) {
-        let i = if i < KEPT {
-            i
-        } else {
-            let v = self.next;
-            self.next = (v + 1) % KEPT;
-            v
-        };
+        let i = kept_target(i, &mut self.next, KEPT);
         let PairWork { cols, kept, .. } = self;
         let k = &mut kept[i];
         let n = (nc.1 - nc.0 + 1) as usize;

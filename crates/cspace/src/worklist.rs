@@ -398,16 +398,11 @@ impl Scratch {
     /// The slot keeping disk `d`'s images, or [`KEPT_IMAGES`] when none does.
     #[inline(never)]
     fn kept_slot(&self, d: &Disk) -> usize {
-        let mut i = 0;
-        while i < KEPT_IMAGES {
+        raster::find_slot(KEPT_IMAGES, |i| {
             let k = &self.kept[i];
             // SAFETY: a valid slot's disk was written with its flag.
-            if k.valid && same_disk(unsafe { k.disk.assume_init_ref() }, d) {
-                return i;
-            }
-            i += 1;
-        }
-        KEPT_IMAGES
+            k.valid && same_disk(unsafe { k.disk.assume_init_ref() }, d)
+        })
     }
 
     /// The images of old cover disk `i` of `disks` (none past `n`) into `self.old`: copied
@@ -434,13 +429,7 @@ impl Scratch {
         if i >= disks.1 {
             return;
         }
-        let slot = if slot < KEPT_IMAGES {
-            slot
-        } else {
-            let v = self.next_kept;
-            self.next_kept = (v + 1) % KEPT_IMAGES;
-            v
-        };
+        let slot = raster::kept_target(slot, &mut self.next_kept, KEPT_IMAGES);
         let k = &mut self.kept[slot];
         k.disk.write(disks.0[i]);
         k.images.write(self.new);
