@@ -17,7 +17,7 @@ fn main() -> ! {
         panic!("board-ID switch out of range (C-space boards are 0..=2)");
     };
     rt::set_board(id);
-    // The jobs' 33 KiB of work memory: outside .bss (not zeroed at reset) and off the
+    // The jobs' 92 KiB of work memory: outside .bss (not zeroed at reset) and off the
     // stack (a frame over 32 KiB got a LINK.W with its displacement wrapped, positive:
     // docs/toolchain.md).
     #[link_section = ".uninit.cspace_scratch"]

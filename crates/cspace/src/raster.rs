@@ -1158,8 +1158,9 @@ pub const NEAR_ROWS: i32 = 1;
 /// `WSHIFT` in the runtime's `__cspace_walk`.
 pub const NEAR_SHIFT: u32 = 3;
 
-/// Whether columns `o` and `k` (both there) are within [`NEAR_ROWS`] of each other at both
-/// ends.
+/// Whether columns `o` and `k` (both there) are updated by their difference: within
+/// [`NEAR_ROWS`] of each other at both ends, or within their rows over 2^[`NEAR_SHIFT`]
+/// at both ends together.
 fn near(o: &Column, k: &Column) -> bool {
     let d0 = (k.first - o.first).abs();
     let d1 = (k.first + k.rows as i32 - o.first - o.rows as i32).abs();

@@ -279,7 +279,7 @@ pub fn drawn_sweep_mm(g: &mut (impl GlobalBus + ?Sized), i: u32) -> (i32, i32) {
     unpack_sweep(g.read_u32(work_entry(i) + 4 * SWEEP_WORD))
 }
 
-/// A job's working memory, kept by the board between jobs (33 KiB: not on the stack, and
+/// A job's working memory, kept by the board between jobs (92 KiB: not on the stack, and
 /// the 68k backend mis-indexes arrays on a function's own frame, llvm/llvm-project#200984).
 pub struct Scratch {
     /// The decrements of the job's first half ([`raster::pair`]).
@@ -346,9 +346,10 @@ impl Scratch {
         self.pair.hits()
     }
     /// Initialises `slot` in place and returns it: every field a job reads before it writes
-    /// it, and not the large work areas ([`RunLog`], [`PairWork`]'s columns and records),
-    /// which stay as they were. For a board's memory outside `.bss` (the image's `.uninit`
-    /// section: zeroing or copying 33 KiB at power-up delayed its first heartbeat).
+    /// it, and not the large work areas ([`RunLog`], [`PairWork`]'s columns, records and
+    /// kept columns, the kept disks' images), which stay as they were. For a board's memory
+    /// outside `.bss` (the image's `.uninit` section: zeroing or copying it, 33 KiB then, at
+    /// power-up delayed its first heartbeat).
     pub fn init(slot: &mut core::mem::MaybeUninit<Scratch>) -> &mut Scratch {
         use core::ptr::addr_of_mut;
         const NO: Images = Images {
