@@ -495,6 +495,61 @@ fn the_reflex_images_evasions_match_the_host() {
 /// sensing, C-space, servo and reflex boards, the collision oracle at every plant step
 /// (`sim-host campaign reflex` runs any seed and count), with the disks where the camera
 /// sees them (the default) and again anywhere the arm reaches.
+/// The image's `__reflex_gens_moved` (whether the escape's kept plan still stands): 0 when
+/// the window's 32 generation words, from any first column and wrapping past 127, are the
+/// saved ones, else 1 with all 32 saved anew; a word changed anywhere in the window (in
+/// either run of a wrapping one) or none, as the escape's Rust answers.
+#[test]
+fn the_reflex_images_window_generations_match_the_host() {
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let (mut b, f) = probe_board(&img, &mut global, "__reflex_gens_moved", &[]);
+    const GENS: u32 = BUF;
+    const SAVED: u32 = BUF + 0x400;
+    const N: usize = reflex::escape::WIN;
+    let mut rng = Rng::new(23);
+    let (mut moved, mut still) = (0, 0);
+    for n in 0..400 {
+        let gens: Vec<u32> = (0..128).map(|_| (rng.next_f64() * 50.0) as u32).collect();
+        let c0 = (rng.next_f64() * 128.0) as usize;
+        let window: Vec<u32> = (0..N).map(|k| gens[(c0 + k) % 128]).collect();
+        let mut saved = window.clone();
+        match n % 4 {
+            0 => {}
+            // One word of the window changed, anywhere in it.
+            1 | 2 => saved[(rng.next_f64() * N as f64) as usize] ^= 1 << (n % 31),
+            // A word just outside it changed: the window is still the same.
+            _ => {
+                let out = (c0 + N + (rng.next_f64() * (128 - N) as f64) as usize) % 128;
+                let mut g = gens.clone();
+                g[out] ^= 7;
+                for (k, &w) in g.iter().enumerate() {
+                    put_word(&mut b.ram, GENS + 4 * k as u32, w);
+                }
+            }
+        }
+        if n % 4 != 3 {
+            for (k, &w) in gens.iter().enumerate() {
+                put_word(&mut b.ram, GENS + 4 * k as u32, w);
+            }
+        }
+        for (k, &w) in saved.iter().enumerate() {
+            put_word(&mut b.ram, SAVED + 4 * k as u32, w);
+        }
+        let args = [GENS, c0 as u32, SAVED, N as u32];
+        let (ret, _) = b.call(&mut global, f, &args, 100_000).expect("returns");
+        let changed = saved != window;
+        assert_eq!(ret, changed as u32, "ask {n}: first column {c0}");
+        let after: Vec<u32> = (0..N)
+            .map(|k| ram_word(&b.ram, SAVED + 4 * k as u32))
+            .collect();
+        assert_eq!(after, window, "ask {n}: the saved words");
+        moved += changed as u32;
+        still += !changed as u32;
+    }
+    assert!(moved > 150 && still > 150, "{moved} moved, {still} not");
+}
+
 #[test]
 fn no_collision_in_2000_random_static_scenes() {
     use sim_host::campaign::{campaign, Kind, Place};

@@ -183,17 +183,38 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
     }
     // The window's first column, in 0..128 (the arm's pixel is unwrapped).
     let c0 = ((ask.at_px[0] - HALF) & 127) as u32;
+    let moved = gens_moved(m, c0, &mut s.gens);
+    let unmoved = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
+    let same_ask = -((*ask == s.memo_ask) as i32);
+    unmoved & same_ask & s.memo_valid
+}
+
+/// Whether a column of the `WIN` from `c0` (wrapping) was written since their generations
+/// were saved in `saved`: zero when none was, else nonzero, and `saved` then holds the
+/// generations now. On the 68020 `__reflex_gens_moved` in the runtime's assembly, a
+/// `CMPM.L` loop over the generations in global RAM that copies them only when one
+/// differs (the compiled loop, a `column_gen` read a column, spent ~2,600 cycles of an
+/// escape's pass); the system tests compare it with this code.
+#[inline(never)]
+fn gens_moved<M: Map + ?Sized>(m: &mut M, c0: u32, saved: &mut [u32; WIN]) -> u32 {
+    #[cfg(target_arch = "m68k")]
+    if let Some(gens) = m.gens_ptr() {
+        extern "C" {
+            fn __reflex_gens_moved(gens: *const u32, c0: u32, saved: *mut u32, n: u32) -> u32;
+        }
+        // SAFETY: `gens` points at the 128 generation words and the routine reads those
+        // (wrapping modulo 128); `saved` holds WIN words, which it reads and writes.
+        return unsafe { __reflex_gens_moved(gens, c0, saved.as_mut_ptr(), WIN as u32) };
+    }
     let mut moved = 0;
     let mut k = 0;
     while k < WIN {
         let g = m.column_gen((c0 + k as u32) & 127);
-        moved |= g ^ s.gens[k];
-        s.gens[k] = g;
+        moved |= g ^ saved[k];
+        saved[k] = g;
         k += 1;
     }
-    let unmoved = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
-    let same_ask = -((*ask == s.memo_ask) as i32);
-    unmoved & same_ask & s.memo_valid
+    moved
 }
 
 /// [`plan`] from the map's words.

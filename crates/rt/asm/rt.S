@@ -262,6 +262,54 @@ __vme_zero_run:
     bne.s   1b
 9:  rts
 
+/* ---- the escape's window generations (crates/reflex, escape::same_window) ----
+ * u32 __reflex_gens_moved(const u32 *gens, u32 c0, u32 *saved, u32 n): 0 when the
+ * generation words gens[(c0 + k) mod 128], k = 0 .. n (0 < n <= 128, c0 < 128), are
+ * saved[k], else 1 with every one of them copied into saved: whether a column of the
+ * window was written since the words were saved. Compared with CMPM.L in at most two runs
+ * that do not wrap (the usual answer, none written, reads each pair once). */
+    .section .text.__reflex_gens_moved, "ax"
+    .globl __reflex_gens_moved
+__reflex_gens_moved:
+    movem.l %d2-%d3/%a2, -(%sp)     /* 12 bytes: arguments from 16(%sp) */
+    movea.l 16(%sp), %a2            /* gens */
+    move.l  20(%sp), %d1            /* c0 */
+    movea.l 24(%sp), %a1            /* saved */
+    move.l  28(%sp), %d2            /* n */
+    move.l  #128, %d3               /* the first run: min(128 - c0, n) words */
+    sub.l   %d1, %d3
+    cmp.l   %d2, %d3
+    bls.s   1f
+    move.l  %d2, %d3
+1:  sub.l   %d3, %d2                /* the second, from column 0 */
+    lea     (%a2,%d1.l*4), %a0
+    subq.l  #1, %d3
+2:  cmpm.l  (%a0)+, (%a1)+
+    dbne    %d3, 2b
+    bne.s   8f
+    tst.l   %d2
+    beq.s   9f
+    movea.l %a2, %a0
+    subq.l  #1, %d2
+3:  cmpm.l  (%a0)+, (%a1)+
+    dbne    %d2, 3b
+    bne.s   8f
+9:  moveq   #0, %d0
+    movem.l (%sp)+, %d2-%d3/%a2
+    rts
+8:  movea.l 24(%sp), %a1            /* one differs: every word saved again */
+    move.l  20(%sp), %d1
+    move.l  28(%sp), %d2
+    subq.l  #1, %d2
+    moveq   #127, %d3
+4:  and.l   %d3, %d1
+    move.l  (%a2,%d1.l*4), (%a1)+
+    addq.l  #1, %d1
+    dbra    %d2, 4b
+    moveq   #1, %d0
+    movem.l (%sp)+, %d2-%d3/%a2
+    rts
+
 /* ---- the reflex's known columns (crates/reflex, window::Known) ----
  * u32 __reflex_known_hits(const u32 *gens, const Known *k, u32 c, u32 n, u32 q, u32 m):
  * how many of columns c .. c + n (not wrapping), from c, k vouches for: the generation word
