@@ -194,7 +194,8 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
 /// generations now. On the 68020 `__reflex_gens_moved` in the runtime's assembly, a
 /// `CMPM.L` loop over the generations in global RAM that copies them only when one
 /// differs (the compiled loop, a `column_gen` read a column, spent ~2,600 cycles of an
-/// escape's pass); the system tests compare it with this code.
+/// escape's pass); `the_reflex_images_window_generations_match_the_host` holds it to what
+/// this code answers.
 #[inline(never)]
 fn gens_moved<M: Map + ?Sized>(m: &mut M, c0: u32, saved: &mut [u32; WIN]) -> u32 {
     #[cfg(target_arch = "m68k")]
