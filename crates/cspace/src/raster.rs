@@ -519,24 +519,26 @@ fn all_columns(s: &Shape, c0: i32, c1: i32, out: &mut [MaybeUninit<Column>; MAX_
 
 /// Every column of image `s`, in order from its first, as the eight words of a [`Column`]
 /// (`col`, `first`, `rows`, `lower_rows`, `upper_from`, `lower_mask`, `upper_mask`,
-/// `ends`) handed to `f`: what `__cspace_columns` writes on the 68020, for the system tests
-/// to compare the image's routine with. Returns the columns' range (unwrapped, inclusive).
+/// `ends`) handed to `f`: the host's [`all_columns`], which `__cspace_columns` on the
+/// 68020 must match, for the system tests to compare the image's routine with. Returns the
+/// columns' range (unwrapped, inclusive).
+#[cfg(not(target_arch = "m68k"))]
 pub fn each_column(s: &Shape, mut f: impl FnMut([u32; 8])) -> (i32, i32) {
     let (c0, c1) = shape_columns(s);
-    let mut k = 0usize;
-    let mut edge = Edge::NONE;
-    let mut col = NO_COLUMN;
-    for c in c0..c1 + 1 {
-        column(s, c, c0, c1, &mut k, &mut edge, &mut col);
+    let mut cols = [const { MaybeUninit::uninit() }; MAX_COLUMNS];
+    all_columns(s, c0, c1, &mut cols);
+    for k in &cols[..(c1 - c0 + 1) as usize] {
+        // SAFETY: `all_columns` wrote the range's columns.
+        let k = unsafe { k.assume_init_ref() };
         f([
-            col.col,
-            col.first as u32,
-            col.rows,
-            col.lower_rows,
-            col.upper_from,
-            col.lower_mask,
-            col.upper_mask,
-            col.ends,
+            k.col,
+            k.first as u32,
+            k.rows,
+            k.lower_rows,
+            k.upper_from,
+            k.lower_mask,
+            k.upper_mask,
+            k.ends,
         ]);
     }
     (c0, c1)
