@@ -1581,15 +1581,11 @@ __cspace_same_shape:
     exg     %d2, %d3            /* both chains cross the rows between */
     move.l  %d4, %d6
     or.l    24(\col), %d6
-2:  moveq   #127, %d4
-    cmp.l   %d1, %d4
-    bcc.s   3f
+2:  cmpi.l  #127, %d1
+    bls.s   4f
     move.l  #0x01010101, %d4    /* a full column: all four throughout */
     move.l  %d4, %d5
     move.l  %d4, %d6
-    bra.s   4f
-3:  move.l  28(\col), %d4
-    or.l    20(\col), %d4
 4:  add.l   %d0, %d2
     move.l  %d2, 4(%a2)
     add.l   %d0, %d3
