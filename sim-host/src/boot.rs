@@ -398,6 +398,9 @@ pub fn profile(
 pub struct FunctionCycles {
     syms: Vec<(u32, String)>,
     cycles: Vec<u64>,
+    /// Instructions executed at each function's first address: its calls (and any branch
+    /// back to its start).
+    entries: Vec<u64>,
 }
 
 impl FunctionCycles {
@@ -411,7 +414,12 @@ impl FunctionCycles {
             .collect();
         syms.sort();
         let cycles = vec![0; syms.len() + 1];
-        Self { syms, cycles }
+        let entries = vec![0; syms.len() + 1];
+        Self {
+            syms,
+            cycles,
+            entries,
+        }
     }
 
     /// Index into `cycles` of the function holding `pc` (0: before the first symbol).
@@ -431,6 +439,9 @@ impl FunctionCycles {
     pub fn charge(&mut self, pc: u32, c: u64) {
         let i = self.slot(pc);
         self.cycles[i] += c;
+        if i > 0 && self.syms[i - 1].0 == pc {
+            self.entries[i] += 1;
+        }
     }
 
     /// The name of the function holding `pc` (`?` before the first symbol).
@@ -441,6 +452,7 @@ impl FunctionCycles {
     /// Forgets every charge.
     pub fn clear(&mut self) {
         self.cycles.iter_mut().for_each(|c| *c = 0);
+        self.entries.iter_mut().for_each(|c| *c = 0);
     }
 
     /// The functions charged, costliest first (`?` before the first symbol).
@@ -451,6 +463,20 @@ impl FunctionCycles {
             .enumerate()
             .filter(|(_, &c)| c > 0)
             .map(|(i, &c)| (self.name(i).to_string(), c))
+            .collect();
+        v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        v
+    }
+
+    /// As [`FunctionCycles::top`], each function with its entries (instructions executed at
+    /// its first address: its calls).
+    pub fn top_calls(&self) -> Vec<(String, u64, u64)> {
+        let mut v: Vec<(String, u64, u64)> = self
+            .cycles
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| c > 0)
+            .map(|(i, &c)| (self.name(i).to_string(), c, self.entries[i]))
             .collect();
         v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
         v

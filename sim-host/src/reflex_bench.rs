@@ -10,7 +10,7 @@
 //!   10 ms (the known columns read again); and escaping, with the map still (the escape
 //!   keeps its plan) and with an obstacle redrawn every 10 ms (it plans again). Free space
 //!   is the worst case for the window (thesis: the window is largest there). With `--top N`
-//!   each case's N costliest functions follow it.
+//!   each case's N costliest functions follow it, with their cycles and calls a pass.
 //! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
 //!   (native mode): the reflex must not slow the arm.
 
@@ -38,8 +38,9 @@ pub struct ImageCase {
     /// moved since the reflex read them: `reflex::window::Known`).
     pub known_per_pass: f64,
     /// With a profile asked for: the `top` functions by the cycles spent in their own code
-    /// over the measured passes (short names), costliest first, as cycles per pass.
-    pub top: Vec<(String, f64)>,
+    /// over the measured passes (short names), costliest first, as cycles and calls per
+    /// pass.
+    pub top: Vec<(String, f64, f64)>,
 }
 
 impl ImageCase {
@@ -318,10 +319,13 @@ fn image_case(
         tests_per_pass: tests_sum / samples.max(1) as f64,
         known_per_pass: known_sum / samples.max(1) as f64,
         top: per.map_or_else(Vec::new, |per| {
-            per.top()
+            per.top_calls()
                 .into_iter()
                 .take(top)
-                .map(|(n, c)| (demangle_short(&n), c as f64 / passes as f64))
+                .map(|(n, c, e)| {
+                    let p = passes as f64;
+                    (demangle_short(&n), c as f64 / p, e as f64 / p)
+                })
                 .collect()
         }),
     })
@@ -549,8 +553,8 @@ pub fn report(dir: &Path, top: usize) -> Result<String, String> {
             c.pixels_per_s(),
             c.reads_per_s()
         );
-        for (name, cycles) in &c.top {
-            let _ = writeln!(r, "    {cycles:>9.0}  {name}");
+        for (name, cycles, calls) in &c.top {
+            let _ = writeln!(r, "    {cycles:>9.0}  {calls:>6.1}  {name}");
         }
     }
     let _ = writeln!(
