@@ -911,6 +911,76 @@ fn count_column_matches_the_host_bus() {
     }
 }
 
+/// The C-space board's run routine (`__vme_count_run`, the runtime's assembly) against the
+/// host bus's loop: random columns with bytes near 0 and 128 scattered in, a run of random
+/// length (0 to the whole column) from a random row given unwrapped (past the map's last
+/// row and past 128), each mask, drawing and erasing: the count it returns and global RAM.
+#[test]
+fn count_run_matches_the_host_bus() {
+    use vme_map::layout::cspace_counter;
+    let (mut b, img, mut g) = board_of(BoardId::Cspace0);
+    let f = img
+        .symbol("__vme_count_run")
+        .expect("__vme_count_run in the cspace image");
+    let mut rng = sim_host::sim::Rng::new(29);
+    let masks = [
+        0x0101_0101u32,
+        0x0100_0001,
+        0x0001_0100,
+        0x0000_0001,
+        0x0101_0001,
+    ];
+    let (mut stopped, mut whole) = (0, 0);
+    for case in 0..600u32 {
+        let i1 = (rng.next_u64() % 128) as u32;
+        // Mostly plain words, so that long runs go through; a few that stop a run.
+        for r in 0..128 {
+            let v = match rng.next_u64() % 64 {
+                0 => 0x0080_0000,
+                1 => 0x7F7F_7F7F,
+                2 => 0x0100_0001,
+                3 => 0,
+                _ => 0x0101_0101 * (1 + (rng.next_u64() % 60) as u32),
+            };
+            ArrayBus::new(&mut g).write_u32(cspace_counter(i1, r, 0), v);
+        }
+        let rows = match case % 4 {
+            0 => 1,
+            1 => 1 + (rng.next_u64() % 4) as u32,
+            2 => (rng.next_u64() % 129) as u32,
+            _ => 128,
+        };
+        let row = (rng.next_u64() % 512) as u32;
+        let mask = masks[(rng.next_u64() % 5) as usize];
+        let down = case % 3 == 0;
+        let col = cspace_counter(i1, 0, 0);
+        let mut host = g.clone();
+        let want = ArrayBus::new(&mut host).count_run(col, row, rows, mask, down);
+        let (got, _) = b
+            .call(
+                &mut g,
+                f,
+                &[vme_map::GLOBAL_RAM_BASE + col, row, rows, mask, down as u32],
+                200_000,
+            )
+            .unwrap();
+        assert_eq!(
+            got, want,
+            "case {case}: rows {rows} from {row}, down {down}"
+        );
+        assert!(g == host, "case {case}: global RAM differs");
+        if want < rows {
+            stopped += 1;
+        } else if rows > 1 {
+            whole += 1;
+        }
+    }
+    assert!(
+        stopped > 50 && whole > 50,
+        "{stopped} runs stopped, {whole} longer ones whole: both outcomes tested"
+    );
+}
+
 /// The sensing board's filter (`__sense_filter`, the runtime's assembly: push a sample, then
 /// the estimate) against `Filter::push` and `Filter::estimate` on the host: random walks
 /// with jumps (the movement check and the long window's restart), the adaptive filter on

@@ -603,10 +603,17 @@ impl<B: GlobalBus + ?Sized> raster::Canvas for JobCanvas<'_, B> {
     fn stripe(&mut self, i1: u32, mask: u32, op: Op) -> Flags {
         self.bus.stripe(i1, mask, op)
     }
+    /// A run of a pair's differences, counted as a column written. Inlined, with
+    /// [`raster::BusCanvas`]'s run, into the pair's application (a frame a layer cost more
+    /// than the one-row runs' updates; the image against the host stays identical).
+    #[inline(always)]
     fn run(&mut self, i1: u32, i2: u32, rows: u32, mask: u32, op: Op) -> Flags {
-        self.bus.run(i1, i2, rows, mask, op)
+        let f = self.bus.run(i1, i2, rows, mask, op);
+        self.tick();
+        f
     }
-    /// Every map write of a job comes here (the stripes' words are a few per image).
+    /// Every whole column a job writes comes here, every run of a pair's differences to
+    /// [`JobCanvas::run`] (the stripes' words are a few per image).
     /// Not `#[inline(always)]`: inlined into its callers (1% faster) the image misdrew the
     /// work list (`bench cspace`'s image-against-host check, table 4).
     fn column(&mut self, i1: u32, i2: u32, pieces: &[u32; 10], op: Op) -> Flags {

@@ -103,6 +103,28 @@ pub trait GlobalBus {
         }
         k
     }
+    /// One run of a C-space map column: from map row `row` (taken mod 128) of the column
+    /// whose pixel in map row 0 is at `col_off`, wrapping from the last row to the first,
+    /// each of `rows` pixels gets `mask` added (`down`: subtracted) while that is a plain
+    /// word add ([`crate::layout::counter_fast`]), stopping before the first that needs the
+    /// byte-by-byte update, which is left as it was. Returns how many were updated (`rows`
+    /// when all): a run of a moved image's differences in one call (on the 68020 the
+    /// runtime's assembly).
+    fn count_run(&mut self, col_off: u32, row: u32, rows: u32, mask: u32, down: bool) -> u32 {
+        use crate::layout::{counter_fast, counter_plain, CSPACE_COUNTERS, CSPACE_SIDE};
+        let mut k = 0;
+        while k < rows {
+            let r = row.wrapping_add(k) % CSPACE_SIDE;
+            let off = col_off + r * CSPACE_SIDE * CSPACE_COUNTERS;
+            let w = self.read_u32(off);
+            if !counter_fast(w, mask, down) {
+                return k;
+            }
+            self.write_u32(off, counter_plain(w, mask, down));
+            k += 1;
+        }
+        rows
+    }
     /// Reads `out.len()` consecutive aligned words from `off` into `out`, in order: a
     /// record's words under its sequence lock in one call (on the 68020 a `MOVE.L (A0)+,
     /// (A1)+` loop in the runtime's assembly).
@@ -188,6 +210,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn free_rows(&mut self, off0: u32, n0: u32, off1: u32, n1: u32, rows: u32, stride: u32) -> u32 {
         (**self).free_rows(off0, n0, off1, n1, rows, stride)
+    }
+    fn count_run(&mut self, col_off: u32, row: u32, rows: u32, mask: u32, down: bool) -> u32 {
+        (**self).count_run(col_off, row, rows, mask, down)
     }
     fn read_words(&mut self, off: u32, out: &mut [u32]) {
         (**self).read_words(off, out)
@@ -392,6 +417,16 @@ impl GlobalBus for MmioGlobal {
         unsafe { __vme_nonzero_bits(Self::ptr::<u32>(off)) }
     }
     #[inline(always)]
+    fn count_run(&mut self, col_off: u32, row: u32, rows: u32, mask: u32, down: bool) -> u32 {
+        extern "C" {
+            // An `ADD.L` / `SUB.L` loop in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_count_run(col: *mut u32, row: u32, rows: u32, mask: u32, down: u32) -> u32;
+        }
+        // SAFETY: the column's 128 aligned words of mapped global RAM from `col_off` (from
+        // `layout`), read and written back by this board alone (its work-list claim).
+        unsafe { __vme_count_run(Self::ptr::<u32>(col_off), row, rows, mask, down as u32) }
+    }
+    #[inline(always)]
     fn count_column(
         &mut self,
         col_off: u32,
@@ -563,6 +598,50 @@ mod tests {
         }
         assert_eq!(
             Plain(ArrayBus::new(&mut copy)).count_column(col, 126, &pieces, 0, false),
+            3
+        );
+    }
+
+    #[test]
+    fn count_run_updates_the_plain_words_and_stops_before_the_first_other() {
+        use crate::layout::cspace_counter;
+        let mut mem = [0u8; 0x2_0000];
+        let col = cspace_counter(5, 0, 0);
+        let at = |r: u32| cspace_counter(5, r, 0);
+        let rows = [126u32, 127, 0, 1];
+        let words = [0x0101_0101u32, 0x7F00_0001, 0x0203_0405, 0x0080_0000];
+        for (r, w) in rows.iter().zip(words) {
+            ArrayBus::new(&mut mem).write_u32(at(*r), w);
+        }
+        let mut bus = ArrayBus::new(&mut mem);
+        // Up from row 126 (given unwrapped: 254), across the seam, stopping at row 1.
+        assert_eq!(bus.count_run(col, 254, 4, 0x0100_0001, false), 3);
+        assert_eq!(bus.read_u32(at(126)), 0x0201_0102);
+        assert_eq!(bus.read_u32(at(127)), 0x8000_0002, "a byte may reach 128");
+        assert_eq!(bus.read_u32(at(0)), 0x0303_0406, "past the seam");
+        assert_eq!(
+            bus.read_u32(at(1)),
+            0x0080_0000,
+            "the stopping word is untouched"
+        );
+        // Row 127 now has a byte at 128: a run from it stops at once; one that ends before
+        // it runs whole.
+        assert_eq!(bus.count_run(col, 127, 2, 0x0000_0001, false), 0);
+        assert_eq!(bus.count_run(col, 126, 1, 0x0000_0001, false), 1);
+        assert_eq!(bus.count_run(col, 126, 0, 0x0000_0001, false), 0);
+        // Down: a selected counter at zero stops it, an unselected one does not.
+        assert_eq!(bus.count_run(col, 0, 1, 0x0001_0000, true), 1);
+        assert_eq!(bus.read_u32(at(0)), 0x0302_0406);
+        bus.write_u32(at(2), 0x0100_0000);
+        assert_eq!(bus.count_run(col, 2, 1, 0x0000_0001, true), 0);
+        assert_eq!(bus.read_u32(at(2)), 0x0100_0000);
+        // The trait's own loop on a bus with only the required methods does the same.
+        let mut copy = [0u8; 0x2_0000];
+        for (r, w) in rows.iter().zip(words) {
+            ArrayBus::new(&mut copy).write_u32(at(*r), w);
+        }
+        assert_eq!(
+            Plain(ArrayBus::new(&mut copy)).count_run(col, 254, 4, 0x0100_0001, false),
             3
         );
     }
