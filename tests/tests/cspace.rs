@@ -288,6 +288,186 @@ fn the_cspace_images_column_extents_match_the_host() {
     );
 }
 
+/// The image's `__cspace_walk` (a pair's differences in the runtime's assembly) called
+/// directly on the emulated CPU has the effect of the host's walk (`raster::walk_words`),
+/// applied record by record to a map of counters at 3: for random columns with short runs
+/// (a row or a few, where a breakpoint that moves passes its neighbour's other row and the
+/// routine's run a breakpoint, for columns whose runs keep their counters, cuts the rows
+/// otherwise than the host's walk), longer ones, full ones, the same counters or others,
+/// moved by whole revolutions or not, over ranges of columns that overlap in part (columns
+/// only one image has). The two record lists may differ (the routine also makes adjacent
+/// runs with the same counters one); their effect may not.
+#[test]
+fn the_cspace_images_walk_has_the_hosts_effect() {
+    use cspace::raster::{apply_record, walk_words};
+    use sim_host::emu::EmuBoard;
+    use sim_host::image::Image;
+    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
+    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let id = BoardId::Cspace0;
+    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let routine = img.symbol("__cspace_walk").unwrap();
+    // The old columns at OLD, the new at NEW (32 bytes each), the records at RECS.
+    const OLD: u32 = 0xC0000;
+    const NEW: u32 = 0xC1000;
+    const RECS: u32 = 0xC2000;
+    const CAP: u32 = 320;
+    let mut rng = sim_host::sim::Rng::new(31);
+    let pick = |rng: &mut sim_host::sim::Rng, n: u64| rng.next_u64() % n;
+    // Each counter with probability 1/3.
+    let random_mask = |rng: &mut sim_host::sim::Rng| {
+        [0x0100_0000u32, 0x0001_0000, 0x0000_0100, 0x0000_0001]
+            .iter()
+            .fold(0, |m, &c| if pick(rng, 3) == 0 { m | c } else { m })
+    };
+    // Map column `c` of an image: its first row anywhere in +-300, a few rows (`short`) or
+    // any number up to the whole column.
+    let column = |rng: &mut sim_host::sim::Rng, c: i32, short: bool| {
+        let rows = if short {
+            1 + pick(rng, 6) as u32
+        } else if pick(rng, 8) == 0 {
+            128
+        } else {
+            pick(rng, 129) as u32
+        };
+        [
+            (c as u32) & 127,
+            (pick(rng, 600) as i32 - 300) as u32,
+            rows,
+            pick(rng, rows as u64 + 3) as u32,
+            pick(rng, rows as u64 + 3) as u32,
+            random_mask(rng),
+            random_mask(rng),
+            if pick(rng, 3) == 0 {
+                random_mask(rng)
+            } else {
+                0
+            },
+        ]
+    };
+    let (mut runs, mut crossed) = (0, 0);
+    for case in 0..3000 {
+        let short = case % 4 != 3;
+        let c0 = pick(&mut rng, 300) as i32 - 150;
+        let n = 1 + pick(&mut rng, 4) as i32;
+        let old: Vec<[u32; 8]> = (0..n).map(|j| column(&mut rng, c0 + j, short)).collect();
+        // The new columns: over a range shifted by up to a column each way, each the old
+        // one at that map column moved a little (breakpoints by 0-3 rows, now and then by
+        // whole revolutions), its counters mostly kept, or a column of its own.
+        let shift = pick(&mut rng, 3) as i32 - 1;
+        let m = (n + pick(&mut rng, 3) as i32 - 1).max(1);
+        let new: Vec<[u32; 8]> = (0..m)
+            .map(|j| {
+                let c = c0 + shift + j;
+                let Some(o) = old.get((c - c0) as usize).filter(|_| c >= c0) else {
+                    return column(&mut rng, c, short);
+                };
+                let mut k = *o;
+                let nudge =
+                    |rng: &mut sim_host::sim::Rng, v: u32| v as i32 + pick(rng, 7) as i32 - 3;
+                let turns = 128 * (pick(&mut rng, 8) == 0) as i32;
+                k[1] = (nudge(&mut rng, k[1]) + turns) as u32;
+                k[2] = nudge(&mut rng, k[2]).clamp(0, 128) as u32;
+                k[3] = nudge(&mut rng, k[3]).clamp(0, k[2] as i32 + 2) as u32;
+                k[4] = nudge(&mut rng, k[4]).clamp(0, k[2] as i32 + 2) as u32;
+                if pick(&mut rng, 4) == 0 {
+                    k[5 + pick(&mut rng, 3) as usize] = random_mask(&mut rng);
+                }
+                k
+            })
+            .collect();
+        let (oc, nc) = ((c0, c0 + n - 1), (c0 + shift, c0 + shift + m - 1));
+        // The host's records, applied.
+        let mut want = cspace::Memory::default();
+        want.map.iter_mut().for_each(|w| *w = 0x0303_0303);
+        let mut host_recs = Vec::new();
+        let count = walk_words(&old, oc, &new, nc, |r| host_recs.push(r));
+        assert!(count <= CAP as usize, "case {case}: {count} records");
+        for r in &host_recs {
+            apply_record(&mut want.canvas(), *r, &old, &new);
+        }
+        // The routine's.
+        let put = |ram: &mut [u8], at: u32, cols: &[[u32; 8]]| {
+            for (j, k) in cols.iter().enumerate() {
+                for (f, w) in k.iter().enumerate() {
+                    let o = at as usize + 32 * j + 4 * f;
+                    ram[o..o + 4].copy_from_slice(&w.to_be_bytes());
+                }
+            }
+        };
+        put(&mut b.ram, OLD, &old);
+        put(&mut b.ram, NEW, &new);
+        let args = [
+            OLD,
+            oc.0 as u32,
+            oc.1 as u32,
+            NEW,
+            nc.0 as u32,
+            nc.1 as u32,
+            RECS,
+            CAP,
+        ];
+        let (got_n, _) = b
+            .call(&mut global, routine, &args, 10_000_000)
+            .expect("the routine returns");
+        assert!(got_n <= CAP, "case {case}: {got_n} records");
+        let word = |o: usize| {
+            let o = RECS as usize + 4 * o;
+            u32::from_be_bytes([b.ram[o], b.ram[o + 1], b.ram[o + 2], b.ram[o + 3]])
+        };
+        let mut got = cspace::Memory::default();
+        got.map.iter_mut().for_each(|w| *w = 0x0303_0303);
+        for i in 0..got_n as usize {
+            let r = [
+                word(5 * i),
+                word(5 * i + 1),
+                word(5 * i + 2),
+                word(5 * i + 3),
+                word(5 * i + 4),
+            ];
+            apply_record(&mut got.canvas(), r, &old, &new);
+        }
+        let differ = (0..128 * 128).find(|&i| got.map[i] != want.map[i]);
+        assert!(
+            differ.is_none(),
+            "case {case}: pixel {:?}: {:08x} against the host's {:08x}\nold {old:?} {oc:?}\nnew {new:?} {nc:?}\nhost {host_recs:?}",
+            differ.map(|i| (i % 128, i / 128)),
+            differ.map_or(0, |i| got.map[i]),
+            differ.map_or(0, |i| want.map[i]),
+        );
+        runs += host_recs.iter().filter(|r| r[0] & 0xFF == 0).count();
+        // Columns where a breakpoint passed its neighbour's other row (counted on the
+        // host's columns).
+        for (j, k) in new.iter().enumerate() {
+            let c = nc.0 + j as i32;
+            if c < oc.0 || c > oc.1 {
+                continue;
+            }
+            let o = &old[(c - oc.0) as usize];
+            let bps = |w: &[u32; 8]| {
+                let (f, r) = (w[1] as i32, w[2] as i32);
+                let (mut l, mut u) = ((w[3] as i32).min(r), (w[4] as i32).min(r));
+                if l > u {
+                    std::mem::swap(&mut l, &mut u);
+                }
+                [f, f + l, f + u, f + r]
+            };
+            let (bo, bn) = (bps(o), bps(k));
+            if (bn[0] - bo[0]).rem_euclid(128) > 8 && (bo[0] - bn[0]).rem_euclid(128) > 8 {
+                continue;
+            }
+            if (0..3).any(|i| bo[i].max(bn[i]) > bo[i + 1].min(bn[i + 1])) {
+                crossed += 1;
+            }
+        }
+    }
+    assert!(
+        runs > 3000 && crossed > 300,
+        "{runs} runs, {crossed} columns with a breakpoint past its neighbour"
+    );
+}
+
 /// The image's `__cspace_same_shape` (which images' kept columns a move reuses) finds two
 /// images the same only when every vertex of every chain and the wrap flag are: one word
 /// changed anywhere, or the flag, parts them.

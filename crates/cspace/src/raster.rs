@@ -580,6 +580,80 @@ pub fn each_column(s: &Shape, mut f: impl FnMut([u32; 8])) -> (i32, i32) {
     (c0, c1)
 }
 
+/// A [`Column`] from its eight words (see [`each_column`]).
+#[cfg(not(target_arch = "m68k"))]
+fn column_of(w: &[u32; 8]) -> Column {
+    Column {
+        col: w[0],
+        first: w[1] as i32,
+        rows: w[2],
+        lower_rows: w[3],
+        upper_from: w[4],
+        lower_mask: w[5],
+        upper_mask: w[6],
+        ends: w[7],
+    }
+}
+
+/// The host's walk of a pair (what `__cspace_walk` on the 68020 must match in effect): the
+/// old image's columns `old` over columns `oc` and the new one's `new` over `nc` (ranges
+/// unwrapped, inclusive, each column as the eight words of [`each_column`]), each record
+/// handed to `f` as five words (kind | map column << 8, row, rows, up, down; see [`Rec`]).
+/// Returns the records' count, or [`MAX_RECS`] + 1 when they did not fit. For the system
+/// tests, with [`apply_record`].
+#[cfg(not(target_arch = "m68k"))]
+pub fn walk_words(
+    old: &[[u32; 8]],
+    oc: (i32, i32),
+    new: &[[u32; 8]],
+    nc: (i32, i32),
+    mut f: impl FnMut([u32; 5]),
+) -> usize {
+    let mut w = PairWork::new();
+    for (side, (cols, range)) in [(old, oc), (new, nc)].into_iter().enumerate() {
+        assert_eq!(
+            cols.len() as i32,
+            range.1 - range.0 + 1,
+            "one column a map column"
+        );
+        for (j, k) in cols.iter().enumerate() {
+            w.cols[side][j].write(column_of(k));
+        }
+    }
+    let n = walk(&mut w, oc, nc);
+    for r in &w.recs[..n.min(MAX_RECS)] {
+        // SAFETY: `walk` wrote the first `n` records.
+        let r = unsafe { r.assume_init() };
+        f([r.kind_col, r.row as u32, r.rows, r.up, r.down]);
+    }
+    n
+}
+
+/// Applies record `rec` of a walk of `old` and `new` (as [`walk_words`] hands them, or as
+/// `__cspace_walk` writes them) to `canvas`, as the pair applies it in one go: a run's up
+/// counters drawn and its down counters erased, a column only the new image has drawn, a
+/// column only the old one has erased.
+#[cfg(not(target_arch = "m68k"))]
+pub fn apply_record<C: Canvas>(
+    canvas: &mut C,
+    rec: [u32; 5],
+    old: &[[u32; 8]],
+    new: &[[u32; 8]],
+) -> Flags {
+    let mut buf = [0; 10];
+    let [kind_col, row, rows, up, down] = rec;
+    match kind_col & 0xFF {
+        REC_RUN => {
+            let col = kind_col >> 8 & WRAP;
+            let mut f = canvas.run(col, row, rows, up, Op::Draw);
+            f.merge(canvas.run(col, row, rows, down, Op::Erase));
+            f
+        }
+        REC_NEW => paint(canvas, &column_of(&new[row as usize]), Op::Draw, &mut buf),
+        _ => paint(canvas, &column_of(&old[row as usize]), Op::Erase, &mut buf),
+    }
+}
+
 /// Words a [`RunLog`] holds: 16 KiB, a worst-case job's decrements several times over (a
 /// 2-inch obstacle's two link-2 images are some 200 columns of three words when they must
 /// be erased whole; a small move leaves a few runs a column, one word each).

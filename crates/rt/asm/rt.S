@@ -1667,6 +1667,41 @@ __cspace_same_shape:
     clr.l   36(%a2)
 .endm
 
+/* WEMIT: the rows d0 .. d6 of column (a0), where the old image's counters d5 differ from
+ * the new one's d1, as a record (kind 0: up, the new and not the old; down, the old and not
+ * the new), or the last record made longer when it ends at d0 (a5) with the same counters.
+ * Sets a5 to d6. To .Lwfull when the records are at the cap. Uses d1-d3. */
+.macro WEMIT
+    move.l  %d5, %d2
+    not.l   %d2
+    and.l   %d1, %d2            /* up: new and not old */
+    not.l   %d1
+    and.l   %d5, %d1            /* down: old and not new */
+    cmp.l   %a5, %d0
+    bne.s   8f
+    cmp.l   -8(%a3), %d2
+    bne.s   8f
+    cmp.l   -4(%a3), %d1
+    bne.s   8f
+    move.l  %d6, %d3            /* right after the last run, the same counters: longer */
+    sub.l   %d0, %d3
+    add.l   %d3, -12(%a3)
+    bra.s   9f
+8:  cmp.l   36(%a6), %d7
+    bcc     .Lwfull
+    move.l  (%a0), %d3
+    lsl.l   #8, %d3             /* kind 0 */
+    move.l  %d3, (%a3)+
+    move.l  %d0, (%a3)+
+    move.l  %d6, %d3
+    sub.l   %d0, %d3
+    move.l  %d3, (%a3)+
+    move.l  %d2, (%a3)+
+    move.l  %d1, (%a3)+
+    addq.l  #1, %d7
+9:  move.l  %d6, %a5
+.endm
+
     .section .text.__cspace_walk, "ax"
     .globl __cspace_walk
     .set    WC, -4              /* column */
@@ -1784,7 +1819,42 @@ __cspace_walk:
      * walked together, breakpoint by breakpoint */
     WRUNS   %a0, WOB, %a4
     WRUNS   %a1, WNB, #0
-    lea     WOB(%a6), %a2       /* the old column's next breakpoint; its run's counters */
+    /* Columns whose runs keep their counters (most of a small move's): the difference is
+     * a run at each breakpoint that moved, between its old and new rows, with the counters
+     * of the runs either side of it (as counts, the new column's rows less the old one's
+     * are the sum of those runs, each breakpoint's step in counters over the rows it moved
+     * across: right also where a breakpoint passes a neighbour's other row, where the
+     * walk below would cut the rows differently). */
+    move.l  WOM+4(%a6), %d0
+    cmp.l   WNM+4(%a6), %d0
+    bne.w   20f
+    move.l  WOM+8(%a6), %d0
+    cmp.l   WNM+8(%a6), %d0
+    bne.w   20f
+    move.l  WOM+12(%a6), %d0
+    cmp.l   WNM+12(%a6), %d0
+    bne.w   20f
+    lea     WOB(%a6), %a2       /* breakpoint i: the old column's, then its counters' */
+    lea     WNB(%a6), %a4       /* run before it 16 bytes on (after the increment) */
+    move.l  #0x80000000, %a5
+    moveq   #3, %d4
+24: move.l  (%a2)+, %d0
+    move.l  (%a4)+, %d6
+    cmp.l   %d6, %d0
+    beq.s   26f
+    blt.s   25f
+    exg     %d0, %d6            /* new below old: the old column's run before it there */
+    move.l  16(%a2), %d5
+    move.l  20(%a2), %d1
+    bra.s   27f
+25: move.l  20(%a2), %d5        /* old below new: the old column's run after it there */
+    move.l  16(%a2), %d1
+27: cmp.l   %d1, %d5
+    beq.s   26f
+    WEMIT
+26: dbra    %d4, 24b
+    bra     .Lwnext
+20: lea     WOB(%a6), %a2       /* the old column's next breakpoint; its run's counters */
     lea     WNB(%a6), %a4       /* 20 bytes on; the new column's likewise */
     move.l  (%a2), %d0          /* p: the lower first row */
     cmp.l   (%a4), %d0
@@ -1810,36 +1880,7 @@ __cspace_walk:
     move.l  20(%a4), %d1        /* new */
     cmp.l   %d1, %d5
     beq.s   10f
-    move.l  %d5, %d2
-    not.l   %d2
-    and.l   %d1, %d2            /* up: new and not old */
-    not.l   %d1
-    and.l   %d5, %d1            /* down: old and not new */
-    /* right after the last run, with the same counters: that run made longer */
-    cmp.l   %a5, %d0
-    bne.s   13f
-    cmp.l   -8(%a3), %d2
-    bne.s   13f
-    cmp.l   -4(%a3), %d1
-    bne.s   13f
-    move.l  %d6, %d3
-    sub.l   %d0, %d3
-    add.l   %d3, -12(%a3)
-    move.l  %d6, %a5
-    bra.s   10f
-13: cmp.l   36(%a6), %d7
-    bcc     .Lwfull
-    move.l  (%a0), %d3
-    lsl.l   #8, %d3             /* kind 0 */
-    move.l  %d3, (%a3)+
-    move.l  %d0, (%a3)+
-    move.l  %d6, %d3
-    sub.l   %d0, %d3
-    move.l  %d3, (%a3)+
-    move.l  %d2, (%a3)+
-    move.l  %d1, (%a3)+
-    addq.l  #1, %d7
-    move.l  %d6, %a5
+    WEMIT
 10: move.l  %d6, %d0
     bra.s   2b
 .Lwnext:
