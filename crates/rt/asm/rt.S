@@ -516,6 +516,36 @@ __vme_read_words:
     .endr
 3:  rts
 
+/* CUP w, t, high, mask, stop: the counter word at (a0) with mask added, unless a byte of it
+ * is at 128 or more (high: 0x80808080), then to stop with the word left as it was; a0 on
+ * to the next row (512 bytes). CDOWN likewise subtracted, unless a selected byte is 0 or a
+ * byte at 128 or more. Uses w and t. The plain word add and subtract of
+ * vme_map::layout::counter_fast, for __vme_count_column and __vme_count_run. */
+.macro CUP w, t, high, mask, stop
+    move.l  (%a0), \w
+    move.l  \w, \t
+    and.l   \high, \t
+    bne.s   \stop
+    add.l   \mask, \w
+    move.l  \w, (%a0)
+    lea     512(%a0), %a0
+.endm
+.macro CDOWN w, t, high, mask, stop
+    move.l  (%a0), \w
+    move.l  \w, \t
+    and.l   \high, \t
+    bne.s   \stop
+    move.l  \w, \t
+    or.l    \high, \t
+    sub.l   \mask, \t
+    and.l   \high, \t
+    cmp.l   \high, \t
+    bne.s   \stop
+    sub.l   \mask, \w
+    move.l  \w, (%a0)
+    lea     512(%a0), %a0
+.endm
+
 /* ---- C-space column: an image's column as up to five runs (vme-map's
  * GlobalBus::count_column, crates/cspace's raster) ----
  * u32 __vme_count_column(u32 *col, u32 row, const u32 *pieces, u32 skip, u32 down):
@@ -579,31 +609,13 @@ __vme_count_column:
     move.l  %a1, %d5
     tst.l   %d5
     bne.s   6f
-5:  move.l  (%a0), %d5          /* up */
-    move.l  %d5, %d6
-    and.l   %d3, %d6
-    bne.s   9f
-    add.l   %d2, %d5
-    move.l  %d5, (%a0)
-    lea     512(%a0), %a0
+5:  CUP     %d5, %d6, %d3, %d2, 9f
     addq.l  #1, %d0
     subq.l  #1, %d4
     bne.s   5b
     moveq   #0, %d6
     bra.s   3b
-6:  move.l  (%a0), %d5          /* down */
-    move.l  %d5, %d6
-    and.l   %d3, %d6
-    bne.s   8f
-    move.l  %d5, %d6
-    or.l    %d3, %d6
-    sub.l   %d2, %d6
-    and.l   %d3, %d6
-    cmp.l   %d3, %d6
-    bne.s   8f
-    sub.l   %d2, %d5
-    move.l  %d5, (%a0)
-    lea     512(%a0), %a0
+6:  CDOWN   %d5, %d6, %d3, %d2, 8f
     addq.l  #1, %d0
     subq.l  #1, %d4
     bne.s   6b
@@ -649,30 +661,12 @@ __vme_count_run:
     subq.l  #1, %d6                 /* DBRA's count */
     tst.l   40(%sp)
     bne.s   5f
-3:  move.l  (%a0), %d5              /* up */
-    move.l  %d5, %d1
-    and.l   %d4, %d1
-    bne.s   9f
-    add.l   %d3, %d5
-    move.l  %d5, (%a0)
-    lea     512(%a0), %a0
+3:  CUP     %d5, %d1, %d4, %d3, 9f  /* up */
     addq.l  #1, %d0
     dbra    %d6, 3b
     moveq   #0, %d1                 /* the next segment from row 0 */
     bra.s   1b
-5:  move.l  (%a0), %d5              /* down */
-    move.l  %d5, %d1
-    and.l   %d4, %d1
-    bne.s   9f
-    move.l  %d5, %d1
-    or.l    %d4, %d1
-    sub.l   %d3, %d1
-    and.l   %d4, %d1
-    cmp.l   %d4, %d1
-    bne.s   9f
-    sub.l   %d3, %d5
-    move.l  %d5, (%a0)
-    lea     512(%a0), %a0
+5:  CDOWN   %d5, %d1, %d4, %d3, 9f  /* down */
     addq.l  #1, %d0
     dbra    %d6, 5b
     moveq   #0, %d1
