@@ -837,6 +837,24 @@ fn free_rows_matches_the_host_bus() {
     );
 }
 
+/// Map column `i1` of global RAM `g` filled with random counter words: one in `one_in`
+/// each of a word with a byte at 128, one with every byte at 127, one with two counters at
+/// 1 and the others 0, and a zero word (the words the counting routines stop at or must
+/// not), the rest plain words of equal counters 1-60.
+fn random_counters(rng: &mut sim_host::sim::Rng, g: &mut [u8], i1: u32, one_in: u64) {
+    use vme_map::layout::cspace_counter;
+    for r in 0..128 {
+        let v = match rng.next_u64() % one_in {
+            0 => 0x0080_0000,
+            1 => 0x7F7F_7F7F,
+            2 => 0x0100_0001,
+            3 => 0,
+            _ => 0x0101_0101 * (1 + (rng.next_u64() % 60) as u32),
+        };
+        ArrayBus::new(g).write_u32(cspace_counter(i1, r, 0), v);
+    }
+}
+
 /// The C-space board's column routine (`__vme_count_column`, the runtime's assembly) against
 /// the host bus's loop: random columns with bytes near 0 and 128 scattered in, five random
 /// runs from a random row (wrapping past the map's last row), a random number of pixels
@@ -852,16 +870,7 @@ fn count_column_matches_the_host_bus() {
     let pieces_at = 0x000C_0100u32; // board RAM for the five (rows, mask) pairs
     for case in 0..400u32 {
         let i1 = (rng.next_u64() % 128) as u32;
-        for r in 0..128 {
-            let v = match rng.next_u64() % 24 {
-                0 => 0x0080_0000,
-                1 => 0x7F7F_7F7F,
-                2 => 0x0100_0001,
-                3 => 0,
-                _ => 0x0101_0101 * (1 + (rng.next_u64() % 60) as u32),
-            };
-            ArrayBus::new(&mut g).write_u32(cspace_counter(i1, r, 0), v);
-        }
+        random_counters(&mut rng, &mut g, i1, 24);
         let masks = [
             0x0101_0101u32,
             0x0100_0001,
@@ -934,16 +943,7 @@ fn count_run_matches_the_host_bus() {
     for case in 0..600u32 {
         let i1 = (rng.next_u64() % 128) as u32;
         // Mostly plain words, so that long runs go through; a few that stop a run.
-        for r in 0..128 {
-            let v = match rng.next_u64() % 64 {
-                0 => 0x0080_0000,
-                1 => 0x7F7F_7F7F,
-                2 => 0x0100_0001,
-                3 => 0,
-                _ => 0x0101_0101 * (1 + (rng.next_u64() % 60) as u32),
-            };
-            ArrayBus::new(&mut g).write_u32(cspace_counter(i1, r, 0), v);
-        }
+        random_counters(&mut rng, &mut g, i1, 64);
         let rows = match case % 4 {
             0 => 1,
             1 => 1 + (rng.next_u64() % 4) as u32,
