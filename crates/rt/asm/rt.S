@@ -546,6 +546,29 @@ __vme_read_words:
     lea     512(%a0), %a0
 .endm
 
+/* CSEG col, row, left, seg, t: the segment of a column's run from map row `row` (0..127)
+ * up to the map's top edge or the run's end, whichever comes first: seg its rows (taken
+ * from left, the run's rows not yet placed), a0 at its first pixel (col: the column's
+ * pixel in map row 0, rows 512 bytes apart). Uses t, which may be row itself (then
+ * row is lost). For __vme_count_column and
+ * __vme_count_run, whose runs wrap from row 127 to row 0. */
+.macro CSEG col, row, left, seg, t
+    move.l  #128, \seg
+    sub.l   \row, \seg
+    cmp.l   \left, \seg
+    bls.s   .Lcseg\@
+    move.l  \left, \seg
+.Lcseg\@:
+    .ifnc \row, \t
+    move.l  \row, \t
+    .endif
+    lsl.l   #8, \t
+    add.l   \t, \t
+    movea.l \col, %a0
+    adda.l  \t, %a0
+    sub.l   \seg, \left
+.endm
+
 /* ---- C-space column: an image's column as up to five runs (vme-map's
  * GlobalBus::count_column, crates/cspace's raster) ----
  * u32 __vme_count_column(u32 *col, u32 row, const u32 *pieces, u32 skip, u32 down):
@@ -592,17 +615,7 @@ __vme_count_column:
     and.l   %d4, %d7
 3:  tst.l   %d1                 /* a segment: rows up to the map's top edge */
     beq.s   1b
-    move.l  #128, %d4
-    sub.l   %d7, %d4
-    cmp.l   %d1, %d4
-    bls.s   4f
-    move.l  %d1, %d4            /* d4 = rows in this segment */
-4:  move.l  %d7, %d5
-    lsl.l   #8, %d5
-    add.l   %d5, %d5            /* row * 512 */
-    movea.l %a2, %a0
-    adda.l  %d5, %a0
-    sub.l   %d4, %d1
+    CSEG    %a2, %d7, %d1, %d4, %d5 /* d4 = rows in this segment */
     add.l   %d4, %d7
     moveq   #127, %d5
     and.l   %d5, %d7
@@ -648,16 +661,7 @@ __vme_count_run:
     and.l   %d5, %d1
 1:  tst.l   %d2                     /* a segment: rows up to the map's top edge */
     beq.s   9f
-    move.l  #128, %d6
-    sub.l   %d1, %d6
-    cmp.l   %d2, %d6
-    bls.s   2f
-    move.l  %d2, %d6                /* d6 = rows in this segment */
-2:  sub.l   %d6, %d2
-    lsl.l   #8, %d1
-    add.l   %d1, %d1                /* row * 512 */
-    movea.l %a1, %a0
-    adda.l  %d1, %a0
+    CSEG    %a1, %d1, %d2, %d6, %d1 /* d6 = rows in this segment */
     subq.l  #1, %d6                 /* DBRA's count */
     tst.l   40(%sp)
     bne.s   5f
