@@ -80,25 +80,17 @@ pub trait GlobalBus {
         skip: u32,
         down: bool,
     ) -> u32 {
-        use crate::layout::{counter_fast, CSPACE_COUNTERS, CSPACE_SIDE};
+        // Piece by piece through [`GlobalBus::count_run`], from the first pixel past `skip`.
         let mut k = 0;
         let mut p = 0;
         while p < 5 {
             let (n, mask) = (pieces[2 * p], pieces[2 * p + 1]);
-            let mut i = 0;
-            while i < n {
-                if k >= skip {
-                    let r = row.wrapping_add(k) % CSPACE_SIDE;
-                    let off = col_off + r * CSPACE_SIDE * CSPACE_COUNTERS;
-                    let w = self.read_u32(off);
-                    if !counter_fast(w, mask, down) {
-                        return k;
-                    }
-                    self.write_u32(off, crate::layout::counter_plain(w, mask, down));
-                }
-                k += 1;
-                i += 1;
+            let from = skip.saturating_sub(k).min(n);
+            let done = self.count_run(col_off, row.wrapping_add(k + from), n - from, mask, down);
+            if done < n - from {
+                return k + from + done;
             }
+            k += n;
             p += 1;
         }
         k
