@@ -837,6 +837,15 @@ fn free_rows_matches_the_host_bus() {
     );
 }
 
+/// Counters the counting routines' tests add and subtract: all four, pairs, one.
+const COUNTER_MASKS: [u32; 5] = [
+    0x0101_0101,
+    0x0100_0001,
+    0x0001_0100,
+    0x0000_0001,
+    0x0101_0001,
+];
+
 /// Map column `i1` of global RAM `g` filled with random counter words: one in `one_in`
 /// each of a word with a byte at 128, one with every byte at 127, one with two counters at
 /// 1 and the others 0, and a zero word (the words the counting routines stop at or must
@@ -871,13 +880,6 @@ fn count_column_matches_the_host_bus() {
     for case in 0..400u32 {
         let i1 = (rng.next_u64() % 128) as u32;
         random_counters(&mut rng, &mut g, i1, 24);
-        let masks = [
-            0x0101_0101u32,
-            0x0100_0001,
-            0x0001_0100,
-            0x0000_0001,
-            0x0101_0001,
-        ];
         let mut pieces = [0u32; 10];
         let mut left = 1 + (rng.next_u64() % 128) as u32;
         for p in 0..5 {
@@ -887,7 +889,7 @@ fn count_column_matches_the_host_bus() {
                 (rng.next_u64() % (left as u64 + 1)) as u32
             };
             pieces[2 * p] = n;
-            pieces[2 * p + 1] = masks[(rng.next_u64() % 5) as usize];
+            pieces[2 * p + 1] = COUNTER_MASKS[(rng.next_u64() % 5) as usize];
             left -= n;
         }
         let total: u32 = (0..5).map(|p| pieces[2 * p]).sum();
@@ -932,13 +934,6 @@ fn count_run_matches_the_host_bus() {
         .symbol("__vme_count_run")
         .expect("__vme_count_run in the cspace image");
     let mut rng = sim_host::sim::Rng::new(29);
-    let masks = [
-        0x0101_0101u32,
-        0x0100_0001,
-        0x0001_0100,
-        0x0000_0001,
-        0x0101_0001,
-    ];
     let (mut stopped, mut whole) = (0, 0);
     for case in 0..600u32 {
         let i1 = (rng.next_u64() % 128) as u32;
@@ -951,7 +946,7 @@ fn count_run_matches_the_host_bus() {
             _ => 128,
         };
         let row = (rng.next_u64() % 512) as u32;
-        let mask = masks[(rng.next_u64() % 5) as usize];
+        let mask = COUNTER_MASKS[(rng.next_u64() % 5) as usize];
         let down = case % 3 == 0;
         let col = cspace_counter(i1, 0, 0);
         let mut host = g.clone();
