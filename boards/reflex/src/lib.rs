@@ -14,7 +14,7 @@
 use board_shell::Shell;
 use cspace::worklist::{self, OBSTACLE_BEACONS};
 use reflex::health::{EntryView, HealthInput, Problem, ENTRIES};
-use reflex::window::BusMap;
+use reflex::window::{BusMap, Map};
 use reflex::{Fault, GoalInput, Input, Reflex, ServoView};
 use regs::IoBus;
 use vme_map::layout::CSPACE_SIDE;
@@ -51,6 +51,9 @@ pub struct Board {
     planner_w: [u32; PLANNER_WORDS],
     /// The reflex's inputs, updated in place each pass.
     input: Input,
+    /// The obstacles as sensed, for the evasion: built on the passes that ask
+    /// ([`SensedMap`]).
+    views: [reflex::ObstacleView; reflex::OBSTACLES],
     /// The work-list entry read last.
     entry: u32,
     /// The reflex's outputs, written in place each pass.
@@ -97,8 +100,8 @@ impl Board {
                     fresh: 0,
                 },
                 obstacles_moving: false,
-                obstacles: [reflex::ObstacleView::NONE; reflex::OBSTACLES],
             },
+            views: reflex::NO_OBSTACLES,
             entry: 0,
             out: reflex::Output::EMPTY,
         }
@@ -163,12 +166,16 @@ impl Board {
         fill_health(&mut inp.health, g, &self.objects_w, ok, self.entry);
         inp.health.fresh = 1 << self.entry;
         inp.obstacles_moving = ok && moving(&self.objects_w);
-        // Only the evasion reads them, and only among moving obstacles.
-        if inp.obstacles_moving {
-            obstacles(&mut inp.obstacles, g, &self.objects_w, ok);
-        }
-        self.reflex
-            .step_into(&self.input, &mut BusMap(&mut *g), &mut self.out);
+        // The obstacles' views are built when the reflex asks (among moving obstacles, on
+        // the tracks' sampling passes and the trapped ones).
+        let mut map = SensedMap {
+            map: BusMap(&mut *g),
+            objects: &self.objects_w,
+            ok,
+            views: &mut self.views,
+            built: false,
+        };
+        self.reflex.step_into(&self.input, &mut map, &mut self.out);
         let out = &self.out;
         if let Some(sub) = out.subgoal_urad {
             self.cycle = self.cycle.wrapping_add(1);
@@ -189,22 +196,8 @@ impl Board {
                 ],
             );
         }
-        if let Some(f) = out.new_fault {
-            let (code, at) = match f {
-                Fault::ServoStale => (FaultCode::StaleHeartbeat, vme_map::SERVO_STATE.offset()),
-                Fault::ServoTorn => (FaultCode::TornRecord, vme_map::SERVO_STATE.offset()),
-                Fault::PlannerStale => (FaultCode::StaleHeartbeat, vme_map::PLANNER_GOAL.offset()),
-                Fault::Input(Problem::MapStale) | Fault::Input(Problem::MapLag) => {
-                    (FaultCode::StaleHeartbeat, vme_map::layout::CSPACE_MAP)
-                }
-                Fault::Input(Problem::MapTorn) => {
-                    (FaultCode::TornRecord, vme_map::layout::WORK_LIST)
-                }
-                Fault::Input(Problem::ObjectsStale) => {
-                    (FaultCode::StaleHeartbeat, vme_map::OBJECTS.offset())
-                }
-            };
-            self.shell.life().degraded(g, code, at);
+        if out.new_fault.is_some() {
+            record_fault(&mut self.shell, g, out.new_fault);
         }
         let state = if self.reflex.holding() {
             BoardState::Degraded
@@ -212,6 +205,28 @@ impl Board {
             BoardState::Running
         };
         self.shell.end(g, state)
+    }
+}
+
+/// Records the pass's new fault `f`, if any, in the board's slot (its code and the address
+/// of the input that failed). Apart from the pass: inlined, the branch on `f` tested a
+/// register copy's flags (docs/toolchain.md, class 1).
+#[inline(never)]
+fn record_fault<G: GlobalBus>(shell: &mut Shell, g: &mut G, f: Option<Fault>) {
+    if let Some(f) = f {
+        let (code, at) = match f {
+            Fault::ServoStale => (FaultCode::StaleHeartbeat, vme_map::SERVO_STATE.offset()),
+            Fault::ServoTorn => (FaultCode::TornRecord, vme_map::SERVO_STATE.offset()),
+            Fault::PlannerStale => (FaultCode::StaleHeartbeat, vme_map::PLANNER_GOAL.offset()),
+            Fault::Input(Problem::MapStale) | Fault::Input(Problem::MapLag) => {
+                (FaultCode::StaleHeartbeat, vme_map::layout::CSPACE_MAP)
+            }
+            Fault::Input(Problem::MapTorn) => (FaultCode::TornRecord, vme_map::layout::WORK_LIST),
+            Fault::Input(Problem::ObjectsStale) => {
+                (FaultCode::StaleHeartbeat, vme_map::OBJECTS.offset())
+            }
+        };
+        shell.life().degraded(g, code, at);
     }
 }
 
@@ -293,6 +308,77 @@ fn obstacles<G: GlobalBus>(
             view(&mut v[i], g, objects, i, b);
         }
         i += 1;
+    }
+}
+
+/// One pass's C-space map in global RAM with the obstacles as sensed: the board's copy of
+/// the object table (`ok`: it read whole), made into the evasion's `views` by [`obstacles`]
+/// on the pass's first ask ([`Map::obstacle_views`]; `built` since). The map's reads are
+/// [`BusMap`]'s.
+struct SensedMap<'a, G: GlobalBus> {
+    map: BusMap<'a, G>,
+    objects: &'a [u32; OBJECT_WORDS],
+    ok: bool,
+    views: &'a mut [reflex::ObstacleView; reflex::OBSTACLES],
+    built: bool,
+}
+
+impl<G: GlobalBus> Map for SensedMap<'_, G> {
+    #[inline(never)]
+    fn obstacle_views(&mut self) -> &[reflex::ObstacleView; reflex::OBSTACLES] {
+        if !self.built {
+            obstacles(self.views, self.map.0, self.objects, self.ok);
+            self.built = true;
+        }
+        self.views
+    }
+    #[inline(always)]
+    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
+        self.map.row_or(i2, i1, n)
+    }
+    #[inline(always)]
+    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        self.map.col_or(i1, i2, n)
+    }
+    #[inline(always)]
+    fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
+        self.map.stripes_or(i1, n)
+    }
+    #[inline(always)]
+    fn free_rows(&mut self, i2: u32, nb: u32, a0: u32, n0: u32, a1: u32, n1: u32) -> u32 {
+        self.map.free_rows(i2, nb, a0, n0, a1, n1)
+    }
+    #[inline(always)]
+    fn row_bits(&mut self, i2: u32, i1: u32) -> u32 {
+        self.map.row_bits(i2, i1)
+    }
+    #[inline(always)]
+    fn stripe_bits(&mut self, i1: u32) -> u32 {
+        self.map.stripe_bits(i1)
+    }
+    #[inline(always)]
+    fn row_run(&mut self, i2: u32, i1: u32) -> u32 {
+        self.map.row_run(i2, i1)
+    }
+    #[inline(always)]
+    fn stripe_run(&mut self, i1: u32) -> u32 {
+        self.map.stripe_run(i1)
+    }
+    #[inline(always)]
+    fn col_run(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        self.map.col_run(i1, i2, n)
+    }
+    #[inline(always)]
+    fn gens_ptr(&mut self) -> Option<*const u32> {
+        self.map.gens_ptr()
+    }
+    #[inline(always)]
+    fn has_gens(&self) -> bool {
+        self.map.has_gens()
+    }
+    #[inline(always)]
+    fn column_gen(&mut self, i1: u32) -> u32 {
+        self.map.column_gen(i1)
     }
 }
 

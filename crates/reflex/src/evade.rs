@@ -583,6 +583,14 @@ impl Tracks {
         }
     }
 
+    /// Whether [`Tracks::update`] at `now_us` takes a sample ([`TRACK_PASS_US`] since the
+    /// last that did): only then does it read the obstacles, so only then need they be
+    /// built ([`crate::Obstacles`]).
+    pub fn due(&self, now_us: u32) -> bool {
+        let dt = now_us.wrapping_sub(self.last_us);
+        masks::lt((dt >> 1) as i32, (TRACK_PASS_US >> 1) as i32) == 0
+    }
+
     /// Takes the positions of the pass at the reflex's time `now_us`, if it is
     /// [`TRACK_PASS_US`] after the last that did: a sample per obstacle whose beacon time is
     /// [`TRACK_GAP_US`] past its track's newest; an invalid obstacle, or one read again

@@ -268,14 +268,16 @@ pub struct Input {
     pub health: HealthInput,
     /// Some obstacle is moving (the sensing board's flag on a valid obstacle beacon).
     pub obstacles_moving: bool,
-    /// The obstacles as sensed, for the evasion ([`evade`]).
-    pub obstacles: [ObstacleView; OBSTACLES],
 }
 
 /// Obstacle slots the reflex is given: one per obstacle beacon of the sensing board, slot
 /// `i` for C-space work-list entry `i` (the board checks the count against
 /// `cspace::worklist::OBSTACLE_BEACONS`).
 pub const OBSTACLES: usize = 6;
+
+/// Every obstacle slot empty: what a map with no sensed obstacles hands the evasion
+/// ([`window::Map::obstacle_views`]).
+pub static NO_OBSTACLES: [ObstacleView; OBSTACLES] = [ObstacleView::NONE; OBSTACLES];
 
 /// One obstacle as the sensing board publishes it and the C-space boards draw it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -555,7 +557,8 @@ impl Reflex {
     }
 
     /// One pass, its outputs written to `out` (the board keeps them in place: an `Output`
-    /// returned by value cost the 68020 a `memset` and a `memcpy` a pass).
+    /// returned by value cost the 68020 a `memset` and a `memcpy` a pass); the obstacles
+    /// as sensed come from `map` ([`Map::obstacle_views`]) when the pass needs them.
     #[inline(never)]
     pub fn step_into<M: Map + ?Sized>(&mut self, inp: &Input, map: &mut M, out: &mut Output) {
         out.clear();
@@ -685,8 +688,8 @@ impl Reflex {
         // Logged only on passes that got this far (a pass that holds needs no log).
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
-        if inp.obstacles_moving {
-            self.tracks.update(self.now_us, &inp.obstacles);
+        if inp.obstacles_moving && self.tracks.due(self.now_us) {
+            self.tracks.update(self.now_us, map.obstacle_views());
         }
         self.window(sv, goal, pass_us, inp, map, out);
     }
@@ -751,8 +754,9 @@ impl Reflex {
         map: &mut M,
         out: &mut Output,
     ) {
-        let (moving, obstacles) = (inp.obstacles_moving, &inp.obstacles);
-        let prev = self.last.unwrap_or(sv.arrest_urad);
+        let moving = inp.obstacles_moving;
+        let mut prev = [0; 2];
+        self.last_or(&sv.arrest_urad, &mut prev);
         // Latency: the state is up to a pass old when read, and the subgoal waits up to a
         // pass for the servo; twice the pass time plus half a millisecond, 1 ms passes at
         // least, 10 ms at most.
@@ -895,7 +899,7 @@ impl Reflex {
                         sub = sv.arrest_urad;
                         let theta_u = [a1.theta, a2.theta];
                         let mask = (moving as u32).wrapping_neg();
-                        self.trapped(sv, &theta_u, mask, obstacles, out, &mut sub);
+                        self.trapped(sv, &theta_u, mask, map, out, &mut sub);
                     }
                 }
             }
@@ -908,6 +912,14 @@ impl Reflex {
         out.known = self.known.take_vouched();
         self.last = Some(sub);
         out.subgoal_urad = Some(sub);
+    }
+
+    /// The last subgoal into `out`, or `arrest_urad` before the first. Apart from
+    /// [`Reflex::window`]: inlined there, its branch tested a register copy's flags
+    /// (docs/toolchain.md, class 1).
+    #[inline(never)]
+    fn last_or(&self, arrest_urad: &[i32; 2], out: &mut [i32; 2]) {
+        *out = self.last.unwrap_or(*arrest_urad);
     }
 
     /// The arm's own neighbourhood is free this pass: its pixel is where an image that is
@@ -925,19 +937,20 @@ impl Reflex {
     /// compiled branch on `moving` there tested a register copy's flags once the window
     /// read the known columns (docs/toolchain.md, class 1).
     #[inline(never)]
-    fn trapped(
+    #[allow(clippy::too_many_arguments)]
+    fn trapped<M: Map + ?Sized>(
         &mut self,
         sv: &ServoView,
         theta_u: &[i32; 2],
         moving: u32,
-        obstacles: &[ObstacleView; OBSTACLES],
+        map: &mut M,
         out: &mut Output,
         sub: &mut [i32; 2],
     ) {
         if moving == 0 {
             return;
         }
-        self.tracks.apply(obstacles, &mut self.tracked);
+        self.tracks.apply(map.obstacle_views(), &mut self.tracked);
         evade::prepare(&mut self.evasion, &sv.theta_urad, &self.tracked);
         let mut b = [0; 3];
         evade::best(&mut self.evasion, &self.evade_dir, &mut b);

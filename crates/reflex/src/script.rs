@@ -61,7 +61,6 @@ pub fn scripted_pass<M: Map + ?Sized>(
             goal,
             health,
             obstacles_moving: w[17] & 2 != 0,
-            obstacles: [crate::ObstacleView::NONE; crate::OBSTACLES],
         },
         map,
     );

@@ -95,7 +95,6 @@ fn resting_at_origin(k: u32, health: HealthInput) -> Input {
         goal: planner([1.0, 1.0], k),
         health,
         obstacles_moving: false,
-        obstacles: [ObstacleView::NONE; OBSTACLES],
     }
 }
 
@@ -109,7 +108,6 @@ fn at_rest(m: &TestMap, theta: [f64; 2], goal: [f64; 2], n: u32) -> Output {
             goal: planner(goal, k),
             health: healthy(k),
             obstacles_moving: false,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         out = r.step(&inp, &mut m.map());
     }
@@ -195,7 +193,6 @@ fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
             goal: planner([2.0, 1.0], k),
             health: healthy(k),
             obstacles_moving: true,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         let s = sub(&o);
@@ -211,6 +208,103 @@ fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
     }
     assert!(escaped);
     assert!(!m.occupied(th[0], th[1]), "ended inside at {th:?}");
+}
+
+/// One pass's map (as the board hands it) whose obstacles' views are built on the pass's
+/// first ask: the passes that built them go to `built`. Its one obstacle comes at the tip of
+/// an arm at (1, 1) rad from 60 mm further out, at 0.3 m/s.
+struct ViewsMap<'a> {
+    map: SliceMap<'a>,
+    pass: u32,
+    asked: bool,
+    built: &'a mut Vec<u32>,
+    views: [ObstacleView; OBSTACLES],
+}
+
+impl Map for ViewsMap<'_> {
+    fn obstacle_views(&mut self) -> &[ObstacleView; OBSTACLES] {
+        if !self.asked {
+            self.asked = true;
+            self.built.push(self.pass);
+            // Both links along 1 rad (the angles are absolute): the tip 0.5 m out.
+            let (ux, uy) = (1f64.cos(), 1f64.sin());
+            let (x, y) = (0.5 * ux, 0.5 * uy);
+            self.views[0] = ObstacleView {
+                valid: true,
+                x_um: ((x + 0.06 * ux) * 1e6) as i32,
+                y_um: ((y + 0.06 * uy) * 1e6) as i32,
+                r_um: 15_000,
+                vx_um_s: (-0.3 * ux * 1e6) as i32,
+                vy_um_s: (-0.3 * uy * 1e6) as i32,
+                t_us: 1000 * self.pass,
+            };
+        }
+        &self.views
+    }
+    fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
+        self.map.row_or(i2, i1, n)
+    }
+    fn col_or(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
+        self.map.col_or(i1, i2, n)
+    }
+    fn stripes_or(&mut self, i1: u32, n: u32) -> u32 {
+        self.map.stripes_or(i1, n)
+    }
+}
+
+/// Runs 40 passes of an arm at rest at (1, 1) rad among moving obstacles on map `m`;
+/// returns each pass's flags and the passes that built the obstacles' views.
+fn views_built(m: &TestMap) -> (Vec<u32>, Vec<u32>) {
+    let mut r = Reflex::default();
+    let (mut flags_k, mut built) = (Vec::new(), Vec::new());
+    for k in 1..=40 {
+        let inp = Input {
+            servo: Some(servo_at([1.0, 1.0], [0.0; 2], k)),
+            goal: planner([2.0, 1.0], k),
+            health: healthy(k),
+            obstacles_moving: true,
+        };
+        let mut map = ViewsMap {
+            map: m.map(),
+            pass: k,
+            asked: false,
+            built: &mut built,
+            views: [ObstacleView::NONE; OBSTACLES],
+        };
+        let mut out = Output::default();
+        r.step_into(&inp, &mut map, &mut out);
+        flags_k.push(out.flags);
+    }
+    (flags_k, built)
+}
+
+#[test]
+fn the_obstacles_views_are_built_only_on_the_passes_that_read_them() {
+    // Escaping from a block the map drew over the arm: only the tracks' samples read the
+    // views, every TRACK_PASS_US (8 passes of 1 ms), none in between.
+    let mut m = TestMap::new();
+    let p = (1.0 / PIX).floor() as i32;
+    m.block(p - 2, p + 6, p - 6, p + 6);
+    let (fl, built) = views_built(&m);
+    assert!(
+        fl.iter().skip(1).all(|f| f & flags::ESCAPING != 0),
+        "{fl:x?}"
+    );
+    let step = evade::TRACK_PASS_US / 1000;
+    let due: Vec<u32> = (1..=40u32).filter(|k| k.is_multiple_of(step)).collect();
+    assert_eq!(built, due);
+    // Trapped (every pixel marked, nowhere to escape to): the evasion reads them every
+    // pass, and they are built once a pass, the tracks' passes included.
+    let mut m = TestMap::new();
+    m.block(0, 127, 0, 127);
+    let (fl, built) = views_built(&m);
+    let trapped: Vec<u32> = (1..=40u32)
+        .filter(|k| fl[*k as usize - 1] & flags::TRAPPED != 0)
+        .collect();
+    assert!(trapped.len() > 30, "{fl:x?}");
+    assert_eq!(built, trapped);
+    // And the evasion takes the arm out of the way of the disk the views bring on.
+    assert!(fl.iter().any(|f| f & flags::EVADING != 0), "{fl:x?}");
 }
 
 #[test]
@@ -229,7 +323,6 @@ fn an_arm_the_map_covers_among_resting_obstacles_holds_instead_of_crossing() {
             goal: planner([2.0, 1.0], k),
             health: healthy(k),
             obstacles_moving: false,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         if o.flags & flags::WAITING != 0 {
@@ -281,7 +374,6 @@ fn a_stale_map_holds_the_arm_at_the_arrest_point_it_had_when_the_map_went_quiet(
                 goal: planner([3.0, 0.0], k),
                 health: h,
                 obstacles_moving: false,
-                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -363,7 +455,6 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
                 goal: planner([1.0, 1.0], k),
                 health: healthy(k),
                 obstacles_moving: false,
-                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -380,7 +471,6 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
                 goal: planner([1.0, 1.0], k.min(20)),
                 health: healthy(k),
                 obstacles_moving: false,
-                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -405,7 +495,6 @@ fn a_stale_servo_state_or_planner_holds_the_arm() {
                 goal,
                 health: healthy(k),
                 obstacles_moving: false,
-                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -427,7 +516,6 @@ fn nothing_is_published_before_the_servo_is_and_the_arm_holds_until_the_map_is_g
             goal: GoalInput::None,
             health: healthy(1),
             obstacles_moving: false,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         },
         &mut m.map(),
     );
@@ -442,7 +530,6 @@ fn nothing_is_published_before_the_servo_is_and_the_arm_holds_until_the_map_is_g
                 goal: planner([1.0, 1.0], k),
                 health: h,
                 obstacles_moving: false,
-                obstacles: [ObstacleView::NONE; OBSTACLES],
             },
             &mut m.map(),
         );
@@ -551,7 +638,7 @@ proptest! {
         // millisecond later; 10 us plant steps; 3 s.
         for k in 1..=3000u32 {
             let o = r.step(
-                &Input { servo: Some(a.view(k)), goal: planner([s[0] + goal.0, s[1] + goal.1], k), health: healthy(k), obstacles_moving: false, obstacles: [ObstacleView::NONE; OBSTACLES] },
+                &Input { servo: Some(a.view(k)), goal: planner([s[0] + goal.0, s[1] + goal.1], k), health: healthy(k), obstacles_moving: false },
                 &mut m.map(),
             );
             for j in 0..100 {
@@ -611,7 +698,6 @@ fn an_arm_resting_in_the_margin_backs_off_though_its_goal_keeps_changing() {
             goal: planner(goal, k),
             health: healthy(k),
             obstacles_moving: false,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         if o.flags & flags::WAITING != 0 {
@@ -937,7 +1023,6 @@ fn an_image_that_comes_onto_a_resting_arm_is_escaped_though_nothing_is_flagged_m
             goal: planner(th, k),
             health: healthy(k),
             obstacles_moving: false,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         if k < 30 {
@@ -981,7 +1066,6 @@ fn a_quiet_planner_stops_the_arm_but_not_its_escape_from_an_obstacle_that_comes_
             goal: planner([1.0, 1.0], cycle),
             health,
             obstacles_moving: true,
-            obstacles: [ObstacleView::NONE; OBSTACLES],
         };
         let o = r.step(&inp, &mut m.map());
         faults += o.new_fault.is_some() as u32;

@@ -18,6 +18,17 @@ use crate::SIDE;
 /// Read access to the C-space map, as wide as the hardware allows. `row_or` and `col_or`
 /// never wrap: the callers split ranges at the torus edge.
 pub trait Map {
+    /// The obstacles as sensed, for the evasion ([`crate::evade`]): each slot's `valid`,
+    /// and the rest of the valid slots (an invalid slot's other words are read by nobody).
+    /// The reflex asks among moving obstacles only, on the passes that read them (the
+    /// tracks' samples, [`crate::evade::TRACK_PASS_US`] apart, and the trapped passes): a
+    /// map handed to one pass builds them on its first call. Built by the board every pass
+    /// among moving obstacles, the six views cost the reflex image ~2,700 cycles of every
+    /// escape pass, where nothing read them seven passes in eight. The default (a map with
+    /// no sensed obstacles: unit tests, scripted passes) has none.
+    fn obstacle_views(&mut self) -> &[crate::ObstacleView; crate::OBSTACLES] {
+        &crate::NO_OBSTACLES
+    }
     /// The bitwise or of the words of pixels `i1 .. i1 + n` in row `i2` (`i1 + n <= 128`).
     fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32;
     /// The bitwise or of the words of pixels `i2 .. i2 + n` in column `i1` (`i2 + n <= 128`).
