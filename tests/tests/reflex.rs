@@ -694,7 +694,9 @@ fn the_servo_rides_out_a_torn_subgoal_briefly_and_faults_on_one_left_torn() {
 /// on the image) against the host, step for step: rectangles and columns asked again and
 /// again around a moving place, pixels and stripe words written between (each followed by
 /// its column's raise), across the torus's edges. Every answer, words read and pixels
-/// vouched for included, must be the host's; and most must be vouched for without a read.
+/// vouched for included, must be the host's; most must be vouched for without a read; and
+/// every free or not-free answer must be what reading the map afresh says (a fresh `Known`
+/// each step), so neither the runs kept nor the marked rows kept outlive a write.
 #[test]
 fn the_reflex_images_known_columns_match_the_host() {
     use reflex::script::{scripted_known, KNOWN_IN_WORDS, KNOWN_OUT_WORDS};
@@ -736,6 +738,14 @@ fn the_reflex_images_known_columns_match_the_host() {
     let host = host_each::<i32, KNOWN_IN_WORDS, KNOWN_OUT_WORDS>(&asks, |w, o| {
         scripted_known(&mut k, &mut ArrayBus::new(&mut host_global), w, o)
     });
+    let mut fresh_global = global.clone();
+    let fresh = host_each::<i32, KNOWN_IN_WORDS, KNOWN_OUT_WORDS>(&asks, |w, o| {
+        let mut k = reflex::window::Known::new();
+        scripted_known(&mut k, &mut ArrayBus::new(&mut fresh_global), w, o)
+    });
+    for (i, (h, f)) in host.iter().zip(&fresh).enumerate() {
+        assert_eq!(h[0], f[0], "step {i}: kept {h:?}, read afresh {f:?}");
+    }
     let (read, vouched): (i64, i64) = host
         .iter()
         .fold((0, 0), |(a, b), o| (a + o[1] as i64, b + o[2] as i64));
