@@ -152,25 +152,36 @@ pub struct Ask {
 
 /// Plans an escape (module docs). `None` when no free pixel is within reach (the arm holds).
 /// Adds the pixel words read to `tests`.
-#[inline(never)]
 pub fn plan<M: Map + ?Sized>(
     m: &mut M,
     s: &mut Scratch,
     ask: &Ask,
     tests: &mut u32,
 ) -> Option<Plan> {
+    *plan_kept(m, s, ask, tests)
+}
+
+/// [`plan`], the answer left in `s` (a kept plan returned by value was a `memcpy` call of
+/// every escape pass on the 68020).
+#[inline(never)]
+pub fn plan_kept<'s, M: Map + ?Sized>(
+    m: &mut M,
+    s: &'s mut Scratch,
+    ask: &Ask,
+    tests: &mut u32,
+) -> &'s Option<Plan> {
     // The window's column generations are read before its words: a column written after
     // this read has a newer generation at the next plan, which then loads it again.
     let same = same_window(m, s, ask);
     if same != 0 {
         s.vouched += WORDS;
-        return s.memo;
+        return &s.memo;
     }
     let p = plan_anew(m, s, ask, tests);
     s.memo_ask = *ask;
     s.memo = p;
     s.memo_valid = -(m.has_gens() as i32);
-    p
+    &s.memo
 }
 
 /// Whether `ask` is the last plan's and no column of its window has been written since

@@ -986,11 +986,12 @@ impl Reflex {
             cross: moving,
             prev_px: self.escape_to,
         };
-        let p = escape::plan(map, &mut self.scratch, &ask, tests);
+        let p = escape::plan_kept(map, &mut self.scratch, &ask, tests);
+        let (to, step) = (p.map(|p| p.target_px), p.map(|p| p.step_px));
         // A plan kept (its window unwritten) stood for the window's pixels.
         self.known.vouch(self.scratch.take_vouched());
-        self.escape_to = p.map(|p| p.target_px);
-        p.map(|p| p.step_px)
+        self.escape_to = to;
+        step
     }
 }
 
