@@ -418,32 +418,51 @@ const STOP_US_PER_U_S_Q24: [i32; 2] = [
 /// is near it, and differences with it do not overflow.
 const NEVER_PX: i32 = 1 << 28;
 
-/// The reflex's state between passes.
+/// The reflex's state between passes. `repr(C)`, the fields every pass touches first: the
+/// 68020's compiled code reaches a field more than 127 bytes from the struct through an
+/// index register it loads first (docs/toolchain.md).
 #[derive(Clone, Debug)]
+#[repr(C)]
 pub struct Reflex {
-    cfg: Config,
-    monitor: Monitor,
+    /// Passes stepped.
+    pass: u32,
+    torn: u32,
+    now_us: u32,
+    last_t_us: u32,
+    last_loops: u32,
+    same_loops: u32,
+    /// The last three intervals between the servo states read (us, at most 2^30).
+    recent_dt_us: [i32; 3],
     /// The subgoal last published (absolute, micro-radians).
     last: Option<[i32; 2]>,
     /// The goal in use.
     goal: Option<[i32; 2]>,
+    /// The goal in angle units.
+    goal_units: Units,
+    /// The previous subgoal in angle units.
+    prev_units: Units,
+    /// What a moving obstacle's border covers in [`REACT_US`], angle units (from the
+    /// configuration, once: a product a pass before).
+    react_u: i32,
     hold: Option<Fault>,
+    healthy_once: bool,
+    /// The planner is quiet: `planner_hold_at` is the goal.
+    planner_holding: bool,
+    /// The arm's pixel (unwrapped) on the last pass its own neighbourhood was free
+    /// ([`NEVER_PX`] before the first).
+    free_px: [i32; 2],
+    /// An obstacle's image came onto the arm: the arm, on or next to [`Reflex::free_px`],
+    /// has its own pixel marked; the escape may cross marked pixels until the arm's
+    /// neighbourhood is free again (-1: yes, 0: no).
+    came: i32,
+    /// The escape target of the previous pass (unwrapped pixels).
+    escape_to: Option<[i32; 2]>,
     hold_at: [i32; 2],
     /// The goal while the planner is quiet ([`Reflex::planner_hold`]): the arrest point of
     /// its last fresh goal. Apart from `hold_at`: a bad map or servo state meanwhile holds
     /// where the arm is then (it may have escaped from that point).
     planner_hold_at: [i32; 2],
-    /// The planner is quiet: `planner_hold_at` is the goal.
-    planner_holding: bool,
-    last_loops: u32,
-    same_loops: u32,
-    torn: u32,
-    last_t_us: u32,
-    /// The last three intervals between the servo states read (us, at most 2^30).
-    recent_dt_us: [i32; 3],
-    now_us: u32,
     started_us: u32,
-    healthy_once: bool,
     planner_cycle: Option<u32>,
     planner_since_us: u32,
     /// The stall clock ([`stall_flags`]).
@@ -453,20 +472,13 @@ pub struct Reflex {
     /// the pass that last did: any other pass in between (moving, clear, a hold) restarts it.
     braked_since_us: u32,
     braked_pass: u32,
-    /// Passes stepped.
-    pass: u32,
-    /// The escape target of the previous pass (unwrapped pixels).
-    escape_to: Option<[i32; 2]>,
-    /// The arm's pixel (unwrapped) on the last pass its own neighbourhood was free
-    /// ([`NEVER_PX`] before the first).
-    free_px: [i32; 2],
-    /// An obstacle's image came onto the arm: the arm, on or next to [`Reflex::free_px`],
-    /// has its own pixel marked; the escape may cross marked pixels until the arm's
-    /// neighbourhood is free again (-1: yes, 0: no).
-    came: i32,
     /// The evasion's last way (each link's speed multiple, `evade::WAY_MULT`), kept one
     /// sample longer.
     evade_dir: [i32; 2],
+    /// The wand position the goal was last computed from.
+    wand_um: [i32; 2],
+    cfg: Config,
+    monitor: Monitor,
     /// The evasion's prediction.
     evasion: evade::Scratch,
     /// The obstacles' positions over the last ~150 ms, for their velocities.
@@ -477,15 +489,6 @@ pub struct Reflex {
     scratch: escape::Scratch,
     /// The runs of rows read free in earlier passes, by column (`window::Known`).
     known: window::Known,
-    /// What a moving obstacle's border covers in [`REACT_US`], angle units (from the
-    /// configuration, once: a product a pass before).
-    react_u: i32,
-    /// The wand position the goal was last computed from.
-    wand_um: [i32; 2],
-    /// The goal in angle units.
-    goal_units: Units,
-    /// The previous subgoal in angle units.
-    prev_units: Units,
     /// The arrest points of the last passes: a hold for an input that went quiet holds at
     /// the arrest point of the moment it did.
     log: arrest_log::ArrestLog,
