@@ -37,27 +37,30 @@ const PLANNER_WORDS: usize = PlannerGoal::WORDS as usize;
 /// `SeqLock::read_raw`, generic over the bus: decoding them through the records' dynamic
 /// closures cost 50,000 cycles a pass on the 68020) and read through references (a
 /// 136-byte table in an `Option` on the stack was misread on the 68k, docs/toolchain.md).
+/// `repr(C)`, the small fields first and the reflex last: the compiled code reaches a field
+/// more than 127 bytes in through an index register it loads first (docs/toolchain.md).
+#[repr(C)]
 pub struct Board {
-    shell: Shell,
-    reflex: Reflex,
     cycle: u32,
-    /// The servo state's words.
-    servo_w: [u32; SERVO_WORDS],
-    /// The object table's words as last read: frame, then x, y, t_us, flags per beacon.
-    objects_w: [u32; OBJECT_WORDS],
+    /// The work-list entry read last.
+    entry: u32,
     /// Whether this pass's read of the object table was whole.
     objects_ok: bool,
-    /// The planner goal's words.
-    planner_w: [u32; PLANNER_WORDS],
+    /// The reflex's outputs, written in place each pass.
+    out: reflex::Output,
+    shell: Shell,
     /// The reflex's inputs, updated in place each pass.
     input: Input,
+    /// The servo state's words.
+    servo_w: [u32; SERVO_WORDS],
+    /// The planner goal's words.
+    planner_w: [u32; PLANNER_WORDS],
+    /// The object table's words as last read: frame, then x, y, t_us, flags per beacon.
+    objects_w: [u32; OBJECT_WORDS],
     /// The obstacles as sensed, for the evasion: built on the passes that ask
     /// ([`SensedMap`]).
     views: [reflex::ObstacleView; reflex::OBSTACLES],
-    /// The work-list entry read last.
-    entry: u32,
-    /// The reflex's outputs, written in place each pass.
-    out: reflex::Output,
+    reflex: Reflex,
 }
 
 impl Default for Board {
