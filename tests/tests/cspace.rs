@@ -142,13 +142,7 @@ fn assert_map_is(global: &[u8], host: &cspace::Memory, what: &str) {
 /// stripe layer they draw, bit for bit.
 #[test]
 fn the_cspace_image_transforms_and_rasterises_like_the_host() {
-    use sim_host::emu::EmuBoard;
-    use sim_host::image::Image;
-    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
-    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let id = BoardId::Cspace0;
-    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let (mut b, img, mut global) = system_tests::board_of(vme_map::BoardId::Cspace0);
     let probe_images = img.symbol("cspace_probe_images").unwrap();
     let probe_draw = img.symbol("cspace_probe_draw").unwrap();
     const BUF: u32 = 0xC0000;
@@ -202,13 +196,7 @@ fn the_cspace_image_transforms_and_rasterises_like_the_host() {
 /// routine's branches for them are tested only here.
 #[test]
 fn the_cspace_images_column_extents_match_the_host() {
-    use sim_host::emu::EmuBoard;
-    use sim_host::image::Image;
-    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
-    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let id = BoardId::Cspace0;
-    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let (mut b, img, mut global) = system_tests::board_of(vme_map::BoardId::Cspace0);
     let routine = img.symbol("__cspace_columns").unwrap();
     // The shape at SHAPE (cspace::Shape, repr(C)), the columns at OUT (32 bytes each).
     const SHAPE: u32 = 0xC0000;
@@ -300,13 +288,7 @@ fn the_cspace_images_column_extents_match_the_host() {
 #[test]
 fn the_cspace_images_walk_has_the_hosts_effect() {
     use cspace::raster::{apply_record, walk_words};
-    use sim_host::emu::EmuBoard;
-    use sim_host::image::Image;
-    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
-    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let id = BoardId::Cspace0;
-    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let (mut b, img, mut global) = system_tests::board_of(vme_map::BoardId::Cspace0);
     let routine = img.symbol("__cspace_walk").unwrap();
     // The old columns at OLD, the new at NEW (32 bytes each), the records at RECS.
     const OLD: u32 = 0xC0000;
@@ -473,13 +455,7 @@ fn the_cspace_images_walk_has_the_hosts_effect() {
 /// changed anywhere, or the flag, parts them.
 #[test]
 fn the_cspace_images_shape_compare_sees_every_word() {
-    use sim_host::emu::EmuBoard;
-    use sim_host::image::Image;
-    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
-    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let id = BoardId::Cspace0;
-    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let (mut b, img, mut global) = system_tests::board_of(vme_map::BoardId::Cspace0);
     let routine = img.symbol("__cspace_same_shape").unwrap();
     const A: u32 = 0xC0000;
     const B: u32 = 0xC1000;
@@ -494,7 +470,7 @@ fn the_cspace_images_shape_compare_sees_every_word() {
     };
     let a = bytes(&shape);
     b.ram[A as usize..A as usize + a.len()].copy_from_slice(&a);
-    let mut same = |b: &mut EmuBoard, other: &[u8]| {
+    let mut same = |b: &mut sim_host::emu::EmuBoard, other: &[u8]| {
         b.ram[B as usize..B as usize + other.len()].copy_from_slice(other);
         let (ret, _) = b
             .call(&mut global, routine, &[A, B], 1_000_000)
@@ -521,13 +497,7 @@ fn the_cspace_images_shape_compare_sees_every_word() {
 /// most), further (0-40 mm) or anywhere, with new radii.
 #[test]
 fn the_cspace_image_moves_images_like_draw_then_erase() {
-    use sim_host::emu::EmuBoard;
-    use sim_host::image::Image;
-    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
-    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let id = BoardId::Cspace0;
-    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let (mut b, img, mut global) = system_tests::board_of(vme_map::BoardId::Cspace0);
     let probe = img.symbol("cspace_probe_move").unwrap();
     let mut moved = 0;
     for n in 0..150 {
@@ -587,13 +557,7 @@ fn the_cspace_image_moves_images_like_draw_then_erase() {
 /// still, bit for bit, the host's image of the last disk.
 #[test]
 fn the_cspace_image_moves_again_from_the_columns_it_kept() {
-    use sim_host::emu::EmuBoard;
-    use sim_host::image::Image;
-    use vme_map::{BoardId, GLOBAL_RAM_SIZE};
-    let img = Image::load(&system_tests::images_dir().join("cspace.elf")).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let id = BoardId::Cspace0;
-    let mut b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
+    let (mut b, img, mut global) = system_tests::board_of(vme_map::BoardId::Cspace0);
     let probe = img.symbol("cspace_probe_move_twice").unwrap();
     let (mut moved, mut kept) = (0, 0);
     for n in 0..60 {

@@ -2,16 +2,8 @@
 
 use sim_host::emu::EmuBoard;
 use sim_host::image::Image;
-use system_tests::{images_dir, put_word, ram_word};
+use system_tests::{board_of, put_word, ram_word};
 use vme_map::{ArrayBus, BoardId, GlobalBus, GLOBAL_RAM_SIZE};
-
-fn board_of(id: BoardId) -> (EmuBoard, Image, Vec<u8>) {
-    let img =
-        Image::load(&images_dir().join(format!("{}.elf", sim_host::boot::image_name(id)))).unwrap();
-    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
-    let b = EmuBoard::new(id, &img, sim_host::devices::standalone(id), &mut global);
-    (b, img, global)
-}
 
 fn board() -> (EmuBoard, Image, Vec<u8>) {
     board_of(BoardId::Reflex)
