@@ -199,8 +199,8 @@ impl Board {
                 ],
             );
         }
-        if out.new_fault.is_some() {
-            record_fault(&mut self.shell, g, out.new_fault);
+        if let Some(f) = out.new_fault {
+            record_fault(&mut self.shell, g, f);
         }
         let state = if self.reflex.holding() {
             BoardState::Degraded
@@ -211,26 +211,24 @@ impl Board {
     }
 }
 
-/// Records the pass's new fault `f`, if any, in the board's slot (its code and the address
-/// of the input that failed). Apart from the pass: inlined, the branch on `f` tested a
+/// Records the pass's new fault `f` in the board's slot (its code and the address of the
+/// input that failed). Apart from the pass: inlined there, the branch on the fault tested a
 /// register copy's flags (docs/toolchain.md, class 1).
 #[inline(never)]
-fn record_fault<G: GlobalBus>(shell: &mut Shell, g: &mut G, f: Option<Fault>) {
-    if let Some(f) = f {
-        let (code, at) = match f {
-            Fault::ServoStale => (FaultCode::StaleHeartbeat, vme_map::SERVO_STATE.offset()),
-            Fault::ServoTorn => (FaultCode::TornRecord, vme_map::SERVO_STATE.offset()),
-            Fault::PlannerStale => (FaultCode::StaleHeartbeat, vme_map::PLANNER_GOAL.offset()),
-            Fault::Input(Problem::MapStale) | Fault::Input(Problem::MapLag) => {
-                (FaultCode::StaleHeartbeat, vme_map::layout::CSPACE_MAP)
-            }
-            Fault::Input(Problem::MapTorn) => (FaultCode::TornRecord, vme_map::layout::WORK_LIST),
-            Fault::Input(Problem::ObjectsStale) => {
-                (FaultCode::StaleHeartbeat, vme_map::OBJECTS.offset())
-            }
-        };
-        shell.life().degraded(g, code, at);
-    }
+fn record_fault<G: GlobalBus>(shell: &mut Shell, g: &mut G, f: Fault) {
+    let (code, at) = match f {
+        Fault::ServoStale => (FaultCode::StaleHeartbeat, vme_map::SERVO_STATE.offset()),
+        Fault::ServoTorn => (FaultCode::TornRecord, vme_map::SERVO_STATE.offset()),
+        Fault::PlannerStale => (FaultCode::StaleHeartbeat, vme_map::PLANNER_GOAL.offset()),
+        Fault::Input(Problem::MapStale) | Fault::Input(Problem::MapLag) => {
+            (FaultCode::StaleHeartbeat, vme_map::layout::CSPACE_MAP)
+        }
+        Fault::Input(Problem::MapTorn) => (FaultCode::TornRecord, vme_map::layout::WORK_LIST),
+        Fault::Input(Problem::ObjectsStale) => {
+            (FaultCode::StaleHeartbeat, vme_map::OBJECTS.offset())
+        }
+    };
+    shell.life().degraded(g, code, at);
 }
 
 /// Publishes the subgoal (`sub`: `ReflexSubgoal`'s words) and the pass's status (`status`:

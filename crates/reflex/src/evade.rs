@@ -587,8 +587,14 @@ impl Tracks {
     /// last that did): only then does it read the obstacles, so only then need they be
     /// built ([`crate::Obstacles`]).
     pub fn due(&self, now_us: u32) -> bool {
+        self.early(now_us) == 0
+    }
+
+    /// -1 when `now_us` is less than [`TRACK_PASS_US`] after the last sample, else 0
+    /// (halved: an unsigned compare in sign masks).
+    fn early(&self, now_us: u32) -> i32 {
         let dt = now_us.wrapping_sub(self.last_us);
-        masks::lt((dt >> 1) as i32, (TRACK_PASS_US >> 1) as i32) == 0
+        masks::lt((dt >> 1) as i32, (TRACK_PASS_US >> 1) as i32)
     }
 
     /// Takes the positions of the pass at the reflex's time `now_us`, if it is
@@ -597,10 +603,9 @@ impl Tracks {
     /// only after [`TRACK_STALE_US`], starts over.
     #[inline(never)]
     pub fn update(&mut self, now_us: u32, obs: &[ObstacleView; OBSTACLES]) {
-        // -1 when too early (halved: an unsigned compare in sign masks); then the loop runs
-        // no obstacle (a bound, not a branch: docs/toolchain.md, class 1).
-        let dt = now_us.wrapping_sub(self.last_us);
-        let early = masks::lt((dt >> 1) as i32, (TRACK_PASS_US >> 1) as i32);
+        // Too early: the loop runs no obstacle (a bound, not a branch: docs/toolchain.md,
+        // class 1).
+        let early = self.early(now_us);
         self.last_us = masks::pick(early, self.last_us as i32, now_us as i32) as u32;
         let n = OBSTACLES & !early as usize;
         let mut i = 0;
