@@ -228,13 +228,22 @@ pub const fn cspace_gen(i1: u32) -> u32 {
     CSPACE_GENS + 4 * (i1 % CSPACE_SIDE)
 }
 
+/// The C-space map's epoch: one word (writers: C-space boards, each raise with `CAS.L`),
+/// raised after every raise of a column's generation ([`raise_column_gen`]), so a reader
+/// that finds it where it was at an earlier read knows that no column was written in
+/// between (up to a write in progress). The reflex trusts the window it proved free in an
+/// earlier pass while the epoch stays (thesis ch. V section 7: each pass tests only the
+/// leading borders).
+pub const CSPACE_EPOCH: u32 = CSPACE_GENS + CSPACE_GENS_BYTES;
+
 /// Raises column `i1`'s generation word by one with `CAS.L` ([`crate::GlobalBus::raise_u32`]:
 /// any number of C-space boards may write a column; a plain read and write could lose a
-/// raise to another board's and bring the word back to a value a reader saw). Call after
-/// the column's words are written.
+/// raise to another board's and bring the word back to a value a reader saw), then the
+/// map's epoch ([`CSPACE_EPOCH`]). Call after the column's words are written.
 #[inline(always)]
 pub fn raise_column_gen<G: crate::GlobalBus + ?Sized>(g: &mut G, i1: u32) {
     g.raise_u32(cspace_gen(i1));
+    g.raise_u32(CSPACE_EPOCH);
 }
 
 /// First log ring.
@@ -300,7 +309,7 @@ const fn seq<R: Record>(name: &'static str, s: SeqLock<R>, writer: Writer) -> Re
 }
 
 /// Every region of global RAM in address order.
-pub const LAYOUT: [Region; 18] = [
+pub const LAYOUT: [Region; 19] = [
     Region {
         name: "header",
         offset: HEADER_MAGIC,
@@ -365,6 +374,13 @@ pub const LAYOUT: [Region; 18] = [
         name: "cspace_gens",
         offset: CSPACE_GENS,
         size: CSPACE_GENS_BYTES,
+        writer: Writer::CspaceBoards,
+        seqlock: false,
+    },
+    Region {
+        name: "cspace_epoch",
+        offset: CSPACE_EPOCH,
+        size: 4,
         writer: Writer::CspaceBoards,
         seqlock: false,
     },
