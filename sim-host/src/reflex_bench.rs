@@ -559,7 +559,7 @@ pub fn report(dir: &Path, top: usize) -> Result<String, String> {
     }
     let _ = writeln!(
         r,
-        "cycles: mean pass, heartbeat to heartbeat; worst: the longest pass (worst Hz: every pass that long); read: pixel words read a pass; known: pixels vouched for without a read (columns whose generation has not moved since read); checked/s: both, per second"
+        "cycles: mean pass, heartbeat to heartbeat; worst: the longest pass (worst Hz: every pass that long); read: pixel words read a pass; known: pixels vouched for without a read (columns whose generation has not moved since read, and the window an earlier pass proved free while the map's epoch has not moved); checked/s: both, per second"
     );
     let _ = writeln!(
         r,

@@ -381,6 +381,10 @@ impl<G: GlobalBus> Map for SensedMap<'_, G> {
     fn column_gen(&mut self, i1: u32) -> u32 {
         self.map.column_gen(i1)
     }
+    #[inline(always)]
+    fn epoch(&mut self) -> u32 {
+        self.map.epoch()
+    }
 }
 
 /// Slot `i`'s view of valid beacon `b` (see [`obstacles`]).

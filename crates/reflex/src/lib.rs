@@ -368,7 +368,7 @@ impl Output {
 
     /// Back to [`Output::EMPTY`], field by field (an assignment of the whole value
     /// compiled to a `memset` call on the 68020; a test holds the two together).
-    #[inline(never)]
+    #[inline(always)]
     pub fn clear(&mut self) {
         self.subgoal_urad = None;
         self.flags = 0;
@@ -757,6 +757,9 @@ impl Reflex {
         map: &mut M,
         out: &mut Output,
     ) {
+        // The map's epoch before any of the pass's reads: while it stays, the window proved
+        // free in an earlier pass needs no read (`Known::begin`).
+        self.known.begin(map);
         let moving = inp.obstacles_moving;
         let mut prev = [0; 2];
         self.last_or(&sv.arrest_urad, &mut prev);
@@ -785,127 +788,22 @@ impl Reflex {
         let (goal_u, prev_u) = (self.goal_units.of(&goal_urad), self.prev_units.of(&prev));
         let a1 = prepare(0, sv, &prev, &prev_u, &goal_u, &m);
         let a2 = prepare(1, sv, &prev, &prev_u, &goal_u, &m);
-        let t_stop_us = masks::min(masks::max(a1.stop_us, a2.stop_us) + lat_us, 400_000);
-        let obs_stop = fx::mul_shr(border_u_s, t_stop_us * US_TO_S_Q32, 32) + 1;
+        let obs_stop = stop_cover_u(border_u_s, a1.stop_us, a2.stop_us, lat_us);
         let clear_px = ESCAPE_CLEAR_PX + ((wide + PIX_U - 1) >> 8);
         let mut tests = 0;
         let keep = MARGIN_U + obs_stop + wide + PIX_U / 8;
         let mut sub = [0; 2];
-        if window::rect_free_known(map, &mut self.known, a1.base, a2.base, &mut tests) {
-            let g = Grow {
-                goal: [a1.goal_span(keep), a2.goal_span(keep)],
-                reach: [a1.reach(), a2.reach()],
-                budget: GROW_BUDGET,
-            };
-            let mut grown = Grown {
-                window: [a1.base, a2.base],
-                blocked: [false, false],
-            };
-            window::grow(map, &mut self.known, &g, &mut grown, &mut tests);
-            let (w1, w2) = (grown.window[0], grown.window[1]);
-            out.window = [(w1.lo, w1.hi), (w2.lo, w2.hi)];
-            out.flags |= flags::BLOCKED1 & (grown.blocked[0] as u32).wrapping_neg();
-            out.flags |= flags::BLOCKED2 & (grown.blocked[1] as u32).wrapping_neg();
-            sub[0] = clamp_into(goal_urad[0], a1.goal, w1, keep);
-            sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
-            self.free_here(&a1, &a2);
-        } else {
-            // An obstacle within the arm's own neighbourhood (wider among moving obstacles)
-            // must be evaded; short of that, brake. An arm that has stood still for
-            // [`FROZEN_US`] (stalled, and flagged so, first) with its own margins on an
-            // obstacle (it started there, braked into the band, or the map's edge moved by a
-            // pixel) cannot brake any further: it backs off to clearance, or would stand
-            // frozen for good (planner campaign seed 2 scene 4: an arm 15 mm from a disk
-            // never moved).
-            // The time at rest braking counts too: the stall clock restarts with every new
-            // goal, and a planner that takes each stall for a wall and moves its request on
-            // restarted it every 200 ms; an arm a pixel from a disk in a channel never moved
-            // (planner campaign seed 1 scene 509: 36 wall-following episodes in 10 s, the
-            // goal 0.3 rad off). Counted over consecutive passes only: a clock left running
-            // through holds and start-up passes, which never get here, fired on the first
-            // braking pass (fig. VI.5 as images backed off at once and ended at the goal's
-            // other elbow).
-            let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
-                && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
-            if at_rest {
-                if self.braked_pass.wrapping_add(1) != self.pass {
-                    self.braked_since_us = self.now_us;
-                }
-                self.braked_pass = self.pass;
-            }
-            // Masks from signs (the compiled compares fed their branch through a register
-            // copy once the evasion was added: docs/toolchain.md class 1); ages capped at
-            // 2^30 us, far beyond the limit, so the signed compare is the unsigned one.
-            let older = |since: u32| {
-                masks::lt(
-                    FROZEN_US as i32,
-                    self.now_us.wrapping_sub(since).min(1 << 30) as i32,
-                )
-            };
-            let frozen = at_rest && (older(self.stall.since_us) | older(self.braked_since_us)) != 0;
-            let k = &mut self.known;
-            let near = !window::rect_free_known(map, k, a1.own, a2.own, &mut tests)
-                || (frozen && !window::rect_free_known(map, k, a1.rest, a2.rest, &mut tests));
-            if !near && window::rect_free_known(map, k, a1.core, a2.core, &mut tests) {
-                // Brake: the subgoal between the arm and its arrest point, as near the goal
-                // as that allows, so the arrest region only shrinks (a subgoal beyond the
-                // arrest point would let the arm speed up into margins nobody tested).
-                out.flags |= flags::BRAKING;
-                out.window = [(a1.core.lo, a1.core.hi), (a2.core.lo, a2.core.hi)];
-                sub[0] = a1.brake_toward(goal_urad[0]);
-                sub[1] = a2.brake_toward(goal_urad[1]);
-                self.escape_to = None;
-                self.free_here(&a1, &a2);
-            } else if !near {
-                // The arrest region meets an obstacle but the arm is clear of it: brake as
-                // hard as the servo can (its setpoint behind its arrest point saturates the
-                // law), never ahead of the arm, so a braking subgoal stays put while the arm
-                // slows.
-                out.flags |= flags::BRAKING;
-                out.window = [(a1.own.lo, a1.own.hi), (a2.own.lo, a2.own.hi)];
-                sub[0] = a1.hard_brake();
-                sub[1] = a2.hard_brake();
-                self.escape_to = None;
-                self.free_here(&a1, &a2);
-            } else {
-                let at = [a1.theta >> 8, a2.theta >> 8];
-                out.window = [(at[0], at[0]), (at[1], at[1])];
-                // The arm on or next to the pixel it last stood on with its neighbourhood
-                // free (it got there through rectangles proven free): whatever is marked
-                // there now came to the arm, moving or not (a disk creeping too slowly for
-                // the sensing board's moving flag walked into an arm held trapped: the demo
-                // with its obstacles in the camera's view). An arm that started in a sliver
-                // never had its neighbourhood free, and still holds.
-                let d0 = masks::abs(at[0].wrapping_sub(self.free_px[0]));
-                let d1 = masks::abs(at[1].wrapping_sub(self.free_px[1]));
-                self.came |= masks::lt(masks::max(d0, d1), 2);
-                let cross = moving | (self.came != 0);
-                match self.escape(
-                    map,
-                    at,
-                    [a1.goal >> 8, a2.goal >> 8],
-                    clear_px,
-                    cross,
-                    &mut tests,
-                ) {
-                    Some(q) => {
-                        // Toward the target a step at a time, so the arm leaves at a speed
-                        // the next passes can still correct (a full-speed dash to a target
-                        // chosen once ran into obstacles that had moved meanwhile).
-                        out.flags |= flags::ESCAPING;
-                        sub[0] = escape_step(a1.theta, q[0]);
-                        sub[1] = escape_step(a2.theta, q[1]);
-                        self.evade_dir = [0, 0];
-                    }
-                    None => {
-                        out.flags |= flags::TRAPPED;
-                        sub = sv.arrest_urad;
-                        let theta_u = [a1.theta, a2.theta];
-                        let mask = (moving as u32).wrapping_neg();
-                        self.trapped(sv, &theta_u, mask, map, out, &mut sub);
-                    }
-                }
-            }
+        // The window the steps would grow, all at once when it is free (it holds the base),
+        // after a pass whose window grew unblocked with the map unwritten since
+        // (`window::fast_grow`); else the base, then the steps.
+        let free = (self.known.fast_grow_may()
+            && self.fast_window(map, &a1, &a2, keep, &goal_urad, out, &mut sub, &mut tests))
+            || (window::rect_free_known(map, &mut self.known, a1.base, a2.base, &mut tests)
+                && self.grow_window(map, &a1, &a2, keep, &goal_urad, out, &mut sub, &mut tests));
+        if !free {
+            self.base_blocked(
+                sv, &a1, &a2, &goal_urad, clear_px, moving, map, out, &mut sub, &mut tests,
+            );
         }
         if out.flags & flags::ESCAPING == 0 {
             self.escape_to = None;
@@ -915,6 +813,201 @@ impl Reflex {
         out.known = self.known.take_vouched();
         self.last = Some(sub);
         out.subgoal_urad = Some(sub);
+    }
+
+    /// The window [`window::fast_grow`] takes at once, if it does: then the subgoal `sub`,
+    /// the flags and the window into `out` ([`Reflex::take_window`]), and true. Apart from
+    /// [`Reflex::window`], as [`Reflex::grow_window`].
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn fast_window<M: Map + ?Sized>(
+        &mut self,
+        map: &mut M,
+        a1: &Axis,
+        a2: &Axis,
+        keep: i32,
+        goal_urad: &[i32; 2],
+        out: &mut Output,
+        sub: &mut [i32; 2],
+        tests: &mut u32,
+    ) -> bool {
+        let g = growth(a1, a2, keep);
+        let mut grown = Grown {
+            window: [a1.base, a2.base],
+            blocked: [false, false],
+        };
+        if window::fast_grow(map, &mut self.known, &g, &mut grown, tests) == 0 {
+            return false;
+        }
+        self.take_window(&grown, a1, a2, keep, goal_urad, out, sub);
+        true
+    }
+
+    /// The window grown from a free base rectangle (`window::grow`): the subgoal `sub`, the
+    /// flags and the window into `out` ([`Reflex::take_window`]); true. Apart from
+    /// [`Reflex::window`]: inlined there, branches of the rest tested the flags of a
+    /// register copy (docs/toolchain.md, class 1).
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn grow_window<M: Map + ?Sized>(
+        &mut self,
+        map: &mut M,
+        a1: &Axis,
+        a2: &Axis,
+        keep: i32,
+        goal_urad: &[i32; 2],
+        out: &mut Output,
+        sub: &mut [i32; 2],
+        tests: &mut u32,
+    ) -> bool {
+        let g = growth(a1, a2, keep);
+        let mut grown = Grown {
+            window: [a1.base, a2.base],
+            blocked: [false, false],
+        };
+        window::grow(map, &mut self.known, &g, &mut grown, tests);
+        self.take_window(&grown, a1, a2, keep, goal_urad, out, sub);
+        true
+    }
+
+    /// Window `grown`, proved free, as the pass's: kept for the next passes
+    /// (`Known::proved_free`), into `out` with its blocked flags, and the goal clamped into
+    /// it as the subgoal `sub`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn take_window(
+        &mut self,
+        grown: &Grown,
+        a1: &Axis,
+        a2: &Axis,
+        keep: i32,
+        goal_urad: &[i32; 2],
+        out: &mut Output,
+        sub: &mut [i32; 2],
+    ) {
+        self.known.proved_free(grown);
+        let (w1, w2) = (grown.window[0], grown.window[1]);
+        out.window = [(w1.lo, w1.hi), (w2.lo, w2.hi)];
+        out.flags |= flags::BLOCKED1 & (grown.blocked[0] as u32).wrapping_neg();
+        out.flags |= flags::BLOCKED2 & (grown.blocked[1] as u32).wrapping_neg();
+        sub[0] = clamp_into(goal_urad[0], a1.goal, w1, keep);
+        sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
+        self.free_here(a1, a2);
+    }
+
+    /// The pass's subgoal `sub` when the base rectangle is not free (the rest of
+    /// [`Reflex::window`]): brake, back off, escape or hold.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn base_blocked<M: Map + ?Sized>(
+        &mut self,
+        sv: &ServoView,
+        a1: &Axis,
+        a2: &Axis,
+        goal_urad: &[i32; 2],
+        clear_px: i32,
+        moving: bool,
+        map: &mut M,
+        out: &mut Output,
+        sub: &mut [i32; 2],
+        tests: &mut u32,
+    ) {
+        // An obstacle within the arm's own neighbourhood (wider among moving obstacles)
+        // must be evaded; short of that, brake. An arm that has stood still for
+        // [`FROZEN_US`] (stalled, and flagged so, first) with its own margins on an
+        // obstacle (it started there, braked into the band, or the map's edge moved by a
+        // pixel) cannot brake any further: it backs off to clearance, or would stand
+        // frozen for good (planner campaign seed 2 scene 4: an arm 15 mm from a disk
+        // never moved).
+        // The time at rest braking counts too: the stall clock restarts with every new
+        // goal, and a planner that takes each stall for a wall and moves its request on
+        // restarted it every 200 ms; an arm a pixel from a disk in a channel never moved
+        // (planner campaign seed 1 scene 509: 36 wall-following episodes in 10 s, the
+        // goal 0.3 rad off). Counted over consecutive passes only: a clock left running
+        // through holds and start-up passes, which never get here, fired on the first
+        // braking pass (fig. VI.5 as images backed off at once and ended at the goal's
+        // other elbow).
+        let at_rest = masks::abs(sv.omega_urad_s[0]) < REST_URAD_S
+            && masks::abs(sv.omega_urad_s[1]) < REST_URAD_S;
+        if at_rest {
+            if self.braked_pass.wrapping_add(1) != self.pass {
+                self.braked_since_us = self.now_us;
+            }
+            self.braked_pass = self.pass;
+        }
+        // Masks from signs (the compiled compares fed their branch through a register
+        // copy once the evasion was added: docs/toolchain.md class 1); ages capped at
+        // 2^30 us, far beyond the limit, so the signed compare is the unsigned one.
+        let older = |since: u32| {
+            masks::lt(
+                FROZEN_US as i32,
+                self.now_us.wrapping_sub(since).min(1 << 30) as i32,
+            )
+        };
+        let frozen = at_rest && (older(self.stall.since_us) | older(self.braked_since_us)) != 0;
+        let k = &mut self.known;
+        let near = !window::rect_free_known(map, k, a1.own, a2.own, tests)
+            || (frozen && !window::rect_free_known(map, k, a1.rest, a2.rest, tests));
+        if !near && window::rect_free_known(map, k, a1.core, a2.core, tests) {
+            // Brake: the subgoal between the arm and its arrest point, as near the goal
+            // as that allows, so the arrest region only shrinks (a subgoal beyond the
+            // arrest point would let the arm speed up into margins nobody tested).
+            out.flags |= flags::BRAKING;
+            out.window = [(a1.core.lo, a1.core.hi), (a2.core.lo, a2.core.hi)];
+            sub[0] = a1.brake_toward(goal_urad[0]);
+            sub[1] = a2.brake_toward(goal_urad[1]);
+            self.escape_to = None;
+            self.free_here(a1, a2);
+        } else if !near {
+            // The arrest region meets an obstacle but the arm is clear of it: brake as
+            // hard as the servo can (its setpoint behind its arrest point saturates the
+            // law), never ahead of the arm, so a braking subgoal stays put while the arm
+            // slows.
+            out.flags |= flags::BRAKING;
+            out.window = [(a1.own.lo, a1.own.hi), (a2.own.lo, a2.own.hi)];
+            sub[0] = a1.hard_brake();
+            sub[1] = a2.hard_brake();
+            self.escape_to = None;
+            self.free_here(a1, a2);
+        } else {
+            let at = [a1.theta >> 8, a2.theta >> 8];
+            out.window = [(at[0], at[0]), (at[1], at[1])];
+            // The arm on or next to the pixel it last stood on with its neighbourhood
+            // free (it got there through rectangles proven free): whatever is marked
+            // there now came to the arm, moving or not (a disk creeping too slowly for
+            // the sensing board's moving flag walked into an arm held trapped: the demo
+            // with its obstacles in the camera's view). An arm that started in a sliver
+            // never had its neighbourhood free, and still holds.
+            let d0 = masks::abs(at[0].wrapping_sub(self.free_px[0]));
+            let d1 = masks::abs(at[1].wrapping_sub(self.free_px[1]));
+            self.came |= masks::lt(masks::max(d0, d1), 2);
+            let cross = moving | (self.came != 0);
+            match self.escape(
+                map,
+                at,
+                [a1.goal >> 8, a2.goal >> 8],
+                clear_px,
+                cross,
+                tests,
+            ) {
+                Some(q) => {
+                    // Toward the target a step at a time, so the arm leaves at a speed
+                    // the next passes can still correct (a full-speed dash to a target
+                    // chosen once ran into obstacles that had moved meanwhile).
+                    out.flags |= flags::ESCAPING;
+                    sub[0] = escape_step(a1.theta, q[0]);
+                    sub[1] = escape_step(a2.theta, q[1]);
+                    self.evade_dir = [0, 0];
+                }
+                None => {
+                    out.flags |= flags::TRAPPED;
+                    *sub = sv.arrest_urad;
+                    let theta_u = [a1.theta, a2.theta];
+                    let mask = (moving as u32).wrapping_neg();
+                    self.trapped(sv, &theta_u, mask, map, out, sub);
+                }
+            }
+        }
     }
 
     /// The last subgoal into `out`, or `arrest_urad` before the first. Apart from
@@ -995,6 +1088,30 @@ impl Reflex {
         self.known.vouch(self.scratch.take_vouched());
         self.escape_to = to;
         step
+    }
+}
+
+/// How far an obstacle's border moving at `border_u_s` (angle units a second) comes while
+/// the arm stops (the slower axis's `stop1_us` or `stop2_us`) after the latency `lat_us`,
+/// 400 ms at most, angle units. The bound in sign masks through an opaque value: LLVM made
+/// a select of it whose branch tested the flags of a register copy (docs/toolchain.md,
+/// class 1).
+#[inline(always)]
+fn stop_cover_u(border_u_s: i32, stop1_us: i32, stop2_us: i32, lat_us: i32) -> i32 {
+    let t_us = masks::max(stop1_us, stop2_us) + lat_us;
+    let over = core::hint::black_box(masks::lt(400_000, t_us));
+    let t_stop_us = t_us + (over & (400_000 - t_us));
+    fx::mul_shr(border_u_s, t_stop_us * US_TO_S_Q32, 32) + 1
+}
+
+/// How far the window may grow from the base rectangles of axes `a1` and `a2`: toward the
+/// goal with `keep` about it, within the reach, within [`GROW_BUDGET`] words.
+#[inline(always)]
+fn growth(a1: &Axis, a2: &Axis, keep: i32) -> Grow {
+    Grow {
+        goal: [a1.goal_span(keep), a2.goal_span(keep)],
+        reach: [a1.reach(), a2.reach()],
+        budget: GROW_BUDGET,
     }
 }
 

@@ -757,6 +757,9 @@ enum KnownOp {
         n1: i32,
         lo2: i32,
         n2: i32,
+        /// Found free, the rectangle is then kept as the pass's proved window
+        /// (`Known::proved_free`), which later passes trust while the map's epoch stays.
+        prove: bool,
     },
     Col {
         i1: i32,
@@ -781,10 +784,92 @@ fn known_op() -> impl Strategy<Value = KnownOp> {
             }),
         // Rectangles near one place (what the reflex asks pass after pass), across the
         // torus's edges, up to the whole axis.
-        (-20i32..20, 1i32..40, -20i32..20, 1i32..140)
-            .prop_map(|(lo1, n1, lo2, n2)| KnownOp::Rect { lo1, n1, lo2, n2 }),
+        (-20i32..20, 1i32..40, -20i32..20, 1i32..140, any::<bool>()).prop_map(
+            |(lo1, n1, lo2, n2, prove)| KnownOp::Rect {
+                lo1,
+                n1,
+                lo2,
+                n2,
+                prove
+            }
+        ),
         (-20i32..20, -20i32..20, 1i32..140).prop_map(|(i1, lo2, n2)| KnownOp::Col { i1, lo2, n2 }),
     ]
+}
+
+/// Runs `ops` over a map holding `start`'s pixels, each question a pass of its own
+/// (`Known::begin`): every answer of the known columns must be a full read's. With
+/// `trust`, a free rectangle asked with `prove` is kept as the pass's proved window, which
+/// later passes trust while the map's epoch stays; without, a free rectangle asked again
+/// must read no word.
+fn known_ops_answer_as_full_reads(
+    ops: &[KnownOp],
+    start: &[(u32, u32)],
+    trust: bool,
+) -> Result<(), TestCaseError> {
+    let mut gram = Gram::new();
+    for &(i1, i2) in start {
+        gram.write(i1, i2, false, 1);
+    }
+    let mut k = window::Known::new();
+    for op in ops {
+        match *op {
+            KnownOp::Write {
+                i1,
+                i2,
+                stripe,
+                set,
+            } => gram.write(i1, i2, stripe, set as u32),
+            KnownOp::Rect {
+                lo1,
+                n1,
+                lo2,
+                n2,
+                prove,
+            } => {
+                let s1 = Span {
+                    lo: lo1,
+                    hi: lo1 + n1 - 1,
+                };
+                let s2 = Span {
+                    lo: lo2,
+                    hi: lo2 + n2 - 1,
+                };
+                let mut g = gram.bus();
+                let mut m = window::BusMap(&mut g);
+                k.begin(&mut m);
+                let (mut t_full, mut t_known, mut t_again) = (0, 0, 0);
+                let full = window::rect_free(&mut m, s1, s2, &mut t_full);
+                let known = window::rect_free_known(&mut m, &mut k, s1, s2, &mut t_known);
+                prop_assert_eq!(known, full, "{:?}", op);
+                let again = window::rect_free_known(&mut m, &mut k, s1, s2, &mut t_again);
+                prop_assert_eq!(again, full);
+                if full && !trust {
+                    prop_assert_eq!(t_again, 0, "a free rectangle asked again is read again");
+                }
+                if full && trust && prove {
+                    k.proved_free(&window::Grown {
+                        window: [s1, s2],
+                        blocked: [false; 2],
+                    });
+                }
+            }
+            KnownOp::Col { i1, lo2, n2 } => {
+                let s2 = Span {
+                    lo: lo2,
+                    hi: lo2 + n2 - 1,
+                };
+                let mut g = gram.bus();
+                let mut m = window::BusMap(&mut g);
+                k.begin(&mut m);
+                let (mut t_full, mut t_known) = (0, 0);
+                let full = window::col_free(&mut m, i1, s2, &mut t_full);
+                let known = window::col_free_known(&mut m, &mut k, i1, s2, &mut t_known);
+                prop_assert_eq!(known, full, "{:?}", op);
+            }
+        }
+    }
+    Ok(())
 }
 
 proptest! {
@@ -798,40 +883,18 @@ proptest! {
         ops in proptest::collection::vec(known_op(), 1..120),
         start in proptest::collection::vec((0u32..128, 0u32..128), 0..40),
     ) {
-        let mut gram = Gram::new();
-        for &(i1, i2) in &start {
-            gram.write(i1, i2, false, 1);
-        }
-        let mut k = window::Known::new();
-        for op in &ops {
-            match *op {
-                KnownOp::Write { i1, i2, stripe, set } => gram.write(i1, i2, stripe, set as u32),
-                KnownOp::Rect { lo1, n1, lo2, n2 } => {
-                    let s1 = Span { lo: lo1, hi: lo1 + n1 - 1 };
-                    let s2 = Span { lo: lo2, hi: lo2 + n2 - 1 };
-                    let mut g = gram.bus();
-                    let mut m = window::BusMap(&mut g);
-                    let (mut t_full, mut t_known, mut t_again) = (0, 0, 0);
-                    let full = window::rect_free(&mut m, s1, s2, &mut t_full);
-                    let known = window::rect_free_known(&mut m, &mut k, s1, s2, &mut t_known);
-                    prop_assert_eq!(known, full, "{:?}", op);
-                    let again = window::rect_free_known(&mut m, &mut k, s1, s2, &mut t_again);
-                    prop_assert_eq!(again, full);
-                    if full {
-                        prop_assert_eq!(t_again, 0, "a free rectangle asked again is read again");
-                    }
-                }
-                KnownOp::Col { i1, lo2, n2 } => {
-                    let s2 = Span { lo: lo2, hi: lo2 + n2 - 1 };
-                    let mut g = gram.bus();
-                    let mut m = window::BusMap(&mut g);
-                    let (mut t_full, mut t_known) = (0, 0);
-                    let full = window::col_free(&mut m, i1, s2, &mut t_full);
-                    let known = window::col_free_known(&mut m, &mut k, i1, s2, &mut t_known);
-                    prop_assert_eq!(known, full, "{:?}", op);
-                }
-            }
-        }
+        known_ops_answer_as_full_reads(&ops, &start, false)?;
+    }
+
+    /// The same with windows proved free in one pass trusted by the next while the map's
+    /// epoch stays (`Known::begin`, `Known::proved_free`): a write anywhere, its column
+    /// raised, ends the trust, so no answer outlives a write.
+    #[test]
+    fn trusted_windows_answer_as_a_full_read(
+        ops in proptest::collection::vec(known_op(), 1..120),
+        start in proptest::collection::vec((0u32..128, 0u32..128), 0..40),
+    ) {
+        known_ops_answer_as_full_reads(&ops, &start, true)?;
     }
 }
 

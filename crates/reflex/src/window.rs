@@ -12,6 +12,15 @@
 //!
 //! Pixel ranges here are unwrapped (any `i32`, the map index is the value mod 128) and
 //! inclusive; a range of 128 pixels or more is the whole axis.
+//!
+//! What earlier passes read is kept ([`Known`]): each column's run of free rows while the
+//! column's generation stays, and the whole window a pass proved free while the map's
+//! epoch stays (no column written since). The thesis tested only the arrest region's
+//! leading borders each pass (section 7) and trusted the rest to the passes before; with
+//! the epoch a pass reads only the pixels of its rectangles outside the window trusted,
+//! and after a pass whose window grew unblocked it takes the window the steps would grow
+//! at once when that rectangle is free ([`fast_grow`]): at top speed a column and a row to
+//! read, where the steps tested every column and row of the window again.
 
 use crate::masks::lt;
 use crate::SIDE;
@@ -106,6 +115,12 @@ pub trait Map {
         let _ = i1;
         0
     }
+    /// The map's epoch (`vme_map::layout::CSPACE_EPOCH`): raised after every raise of a
+    /// column's generation, so while it stays no column was written. Meaningful only when
+    /// [`Map::has_gens`].
+    fn epoch(&mut self) -> u32 {
+        0
+    }
     /// Bit `k` set when stripe `i1 + k` is marked, `k` < 32 (`i1` a multiple of 32).
     fn stripe_bits(&mut self, i1: u32) -> u32 {
         let mut bits = 0;
@@ -129,6 +144,9 @@ impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
     }
     fn column_gen(&mut self, i1: u32) -> u32 {
         self.0.read_u32(vme_map::layout::cspace_gen(i1))
+    }
+    fn epoch(&mut self) -> u32 {
+        self.0.read_u32(vme_map::layout::CSPACE_EPOCH)
     }
     fn col_run(&mut self, i1: u32, i2: u32, n: u32) -> u32 {
         use vme_map::layout::{cspace_counter, CSPACE_COUNTERS, CSPACE_SIDE};
@@ -319,6 +337,21 @@ pub struct Known {
     /// over it is not free without a read (an arm escaping from an obstacle asks for its
     /// own marked column every pass, ~500 cycles of reads a column on the 68020).
     mark: [u8; SIDE as usize],
+    /// A window proved free (every pixel, stripe words included, read free or vouched for)
+    /// in the pass that began at map epoch `free_epoch` ([`Known::proved_free`]).
+    free: [Span; 2],
+    /// The map's epoch ([`Map::epoch`]) at the start of the pass that proved `free`.
+    free_epoch: u32,
+    /// -1 once `free` holds a window, else 0.
+    free_set: i32,
+    /// Nonzero when the window in `free` grew unblocked along both axes ([`fast_grow`] is
+    /// tried only after such a pass).
+    free_whole: u32,
+    /// The map's epoch at the start of this pass ([`Known::begin`]).
+    epoch: u32,
+    /// -1 when this pass may trust `free` (the map's epoch has not moved since it was
+    /// proved), else 0.
+    free_ok: i32,
 }
 
 /// [`Known::mark`]'s value for a column with no row known marked.
@@ -350,6 +383,57 @@ impl Known {
             len: [0; SIDE as usize],
             vouched: 0,
             mark: [NO_MARK; SIDE as usize],
+            free: [Span { lo: 0, hi: 0 }; 2],
+            free_epoch: 0,
+            free_set: 0,
+            free_whole: 0,
+            epoch: 0,
+            free_ok: 0,
+        }
+    }
+
+    /// Starts a pass, before any of its reads of the map: reads the map's epoch, and trusts
+    /// the window proved free in an earlier pass while the epoch has not moved since (no
+    /// column written meanwhile). The thesis tested only the arrest region's leading
+    /// borders each pass (ch. V section 7) and trusted the rest to the passes before; the
+    /// epoch makes that trust earned. Without generations nothing is trusted.
+    #[inline(always)]
+    pub fn begin<M: Map + ?Sized>(&mut self, m: &mut M) {
+        if !m.has_gens() {
+            self.free_ok = 0;
+            return;
+        }
+        let e = m.epoch();
+        self.epoch = e;
+        let moved = e ^ self.free_epoch;
+        // -1 when unmoved (a mask: docs/toolchain.md class 1).
+        let same = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
+        self.free_ok = self.free_set & same;
+    }
+
+    /// Records grown window `w` as proved free in this pass: every pixel of it, and the
+    /// stripe word of every column, read free or vouched for since [`Known::begin`].
+    pub fn proved_free(&mut self, w: &Grown) {
+        self.free = w.window;
+        self.free_epoch = self.epoch;
+        self.free_set = -1;
+        self.free_whole = !(w.blocked[0] | w.blocked[1]) as u32;
+    }
+
+    /// Whether [`fast_grow`] may take the window at once: a window this pass trusts
+    /// ([`Known::begin`]) that grew unblocked.
+    #[inline(always)]
+    pub fn fast_grow_may(&self) -> bool {
+        (self.free_ok as u32 & self.free_whole) != 0
+    }
+
+    /// The window this pass may trust as free ([`Known::begin`]), if any.
+    #[inline(always)]
+    fn trusted(&self) -> Option<[Span; 2]> {
+        if self.free_ok != 0 {
+            Some(self.free)
+        } else {
+            None
         }
     }
 
@@ -524,9 +608,126 @@ pub fn rect_free_known<M: Map + ?Sized>(
     if !m.has_gens() {
         return rect_free(m, s1, s2, tests);
     }
+    if let Some(f) = k.trusted() {
+        return rect_free_trusting(m, k, &f, s1, s2, tests);
+    }
+    columns_free(m, k, s1, s2, tests)
+}
+
+/// [`rect_free_known`] through the known columns alone (`s1`, `s2` not empty).
+#[inline(never)]
+fn rect_free_columns<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    s1: Span,
+    s2: Span,
+    tests: &mut u32,
+) -> bool {
+    columns_free(m, k, s1, s2, tests)
+}
+
+/// [`rect_free_columns`]'s body.
+#[inline(always)]
+fn columns_free<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    s1: Span,
+    s2: Span,
+    tests: &mut u32,
+) -> bool {
     let [(a0, n0), (a1, n1)] = s1.runs();
     let (q, rows) = ((s2.lo as u32) & (SIDE - 1), s2.len());
     k.columns(m, a0, n0, q, rows, tests) && k.columns(m, a1, n1, q, rows, tests)
+}
+
+/// The pixels of span `s` below span `f` and above it (unwrapped; each empty when its
+/// `hi` is below its `lo`).
+#[inline(always)]
+fn outside(s: Span, f: Span) -> [Span; 2] {
+    [
+        Span {
+            lo: s.lo,
+            hi: s.hi.min(f.lo - 1),
+        },
+        Span {
+            lo: s.lo.max(f.hi + 1),
+            hi: s.hi,
+        },
+    ]
+}
+
+/// The pixels of span `s` within span `f` (empty when its `hi` is below its `lo`).
+#[inline(always)]
+fn within(s: Span, f: Span) -> Span {
+    Span {
+        lo: s.lo.max(f.lo),
+        hi: s.hi.min(f.hi),
+    }
+}
+
+/// Pixels in span `s`, 0 when it is empty.
+#[inline(always)]
+fn count(s: Span) -> u32 {
+    if s.hi < s.lo {
+        0
+    } else {
+        s.len()
+    }
+}
+
+/// [`rect_free_known`] with window `f` trusted free ([`Known::begin`]): only the parts of
+/// `s1` x `s2` outside it are tested (at most four rectangles), the rest vouched for.
+#[inline(never)]
+fn rect_free_trusting<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    f: &[Span; 2],
+    s1: Span,
+    s2: Span,
+    tests: &mut u32,
+) -> bool {
+    let [l1, r1] = outside(s1, f[0]);
+    if count(l1) != 0 && !rect_free_columns(m, k, l1, s2, tests) {
+        return false;
+    }
+    if count(r1) != 0 && !rect_free_columns(m, k, r1, s2, tests) {
+        return false;
+    }
+    let mid1 = within(s1, f[0]);
+    if count(mid1) == 0 {
+        return true;
+    }
+    let [l2, r2] = outside(s2, f[1]);
+    if count(l2) != 0 && !trusted_columns_free(m, k, mid1, l2, tests) {
+        return false;
+    }
+    if count(r2) != 0 && !trusted_columns_free(m, k, mid1, r2, tests) {
+        return false;
+    }
+    k.vouch(count(mid1) * count(within(s2, f[1])));
+    true
+}
+
+/// Most rows of a piece read as rows rather than through the known columns: a word costs
+/// the 68020 ~7.4 cycles in a row, a known column ~38 to vouch for.
+const ROWS_READ: u32 = 4;
+
+/// Whether columns `c` of a window trusted free (their stripe words vouched for with it)
+/// are free over rows `r` outside it (both not empty): a few rows read as rows, more
+/// through the known columns.
+#[inline(never)]
+fn trusted_columns_free<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    c: Span,
+    r: Span,
+    tests: &mut u32,
+) -> bool {
+    let n = count(r);
+    if n <= ROWS_READ {
+        return rows_over::<M, true>(m, r.lo, n, c, tests) == n;
+    }
+    rect_free_columns(m, k, c, r, tests)
 }
 
 /// Whether column `i1` is free over `s2`, as [`col_free`], reading only what `k` cannot
@@ -542,8 +743,11 @@ pub fn col_free_known<M: Map + ?Sized>(
     if !m.has_gens() {
         return col_free(m, i1, s2, tests);
     }
-    let c = (i1 as u32) & (SIDE - 1);
-    k.columns(m, c, 1, (s2.lo as u32) & (SIDE - 1), s2.len(), tests)
+    let c = Span { lo: i1, hi: i1 };
+    if let Some(f) = k.trusted() {
+        return rect_free_trusting(m, k, &f, c, s2, tests);
+    }
+    rect_free_columns(m, k, c, s2, tests)
 }
 
 /// Whether rows `b .. b + nb` are free over the runs (`a0`, `n0`) and (`a1`, `n1`).
@@ -586,8 +790,37 @@ pub fn col_free<M: Map + ?Sized>(m: &mut M, i1: i32, s2: Span, tests: &mut u32) 
 /// stripe word read (or vouched for, [`Known`]) when it joined the window this pass, by
 /// [`rect_free`] / [`rect_free_known`] or [`col_free`] / [`col_free_known`] (reading them
 /// again for every row was half the words a growing window read).
+///
+/// With a window `k` trusts ([`Known::begin`]) only the pixels of the row outside it are
+/// read.
 #[inline(never)]
-pub fn window_row_free<M: Map + ?Sized>(m: &mut M, i2: i32, s1: Span, tests: &mut u32) -> bool {
+pub fn window_row_free<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    i2: i32,
+    s1: Span,
+    tests: &mut u32,
+) -> bool {
+    if let Some(f) = k.trusted() {
+        if f[1].lo <= i2 && i2 <= f[1].hi {
+            let [l1, r1] = outside(s1, f[0]);
+            k.vouch(count(within(s1, f[0])));
+            let mut free = true;
+            if count(l1) != 0 {
+                free &= row_free(m, i2, l1, tests);
+            }
+            if count(r1) != 0 {
+                free &= row_free(m, i2, r1, tests);
+            }
+            return free;
+        }
+    }
+    row_free(m, i2, s1, tests)
+}
+
+/// Whether row `i2`'s map words over `s1` (not empty) are all zero.
+#[inline(never)]
+fn row_free<M: Map + ?Sized>(m: &mut M, i2: i32, s1: Span, tests: &mut u32) -> bool {
     let r = (i2 as u32) & (SIDE - 1);
     let [(a0, n0), (a1, n1)] = s1.runs();
     *tests += n0 + n1;
@@ -617,6 +850,62 @@ pub struct Grown {
     pub blocked: [bool; 2],
 }
 
+/// Where [`grow`] takes axis span `cur` toward goal span `g` within reach `r` when every
+/// pixel on the way is free and the budget does not bind: up to the goal's far end (unless
+/// the reach or the whole axis stops it first), then down to its near end, as [`step`] and
+/// [`rows_run`] go.
+#[inline(always)]
+fn limit(g: Span, r: Span, cur: Span) -> Span {
+    let mut w = cur;
+    let side = SIDE as i32;
+    if g.hi > w.hi {
+        if w.hi + 1 > r.hi || w.hi + 1 < r.lo || w.hi - w.lo + 1 >= side {
+            return w;
+        }
+        w.hi = g.hi.min(r.hi).min(w.lo + side - 1);
+        if w.hi < g.hi {
+            return w;
+        }
+    }
+    if g.lo < w.lo {
+        if w.lo - 1 > r.hi || w.lo - 1 < r.lo || w.hi - w.lo + 1 >= side {
+            return w;
+        }
+        w.lo = g.lo.max(r.lo).max(w.hi - side + 1);
+    }
+    w
+}
+
+/// The window [`grow`] would reach from base `w.window` if nothing blocked it, taken at
+/// once when that whole rectangle is free: after a pass whose window grew unblocked, with
+/// the map's epoch unmoved ([`Known::begin`]), only its pixels outside that window are
+/// read (at top speed the arm's window moves a pixel or two a pass: a column and a row to
+/// read where the steps tested every column and row of it again). Returns 1 when taken
+/// (`w` then holds the window, unblocked), 0 when the steps must decide (nothing trusted,
+/// the last window blocked, more words to read than `grow.budget`, or a pixel marked).
+/// The window is the steps' whenever their budget does not cut them short (then it is
+/// larger, and as free).
+#[inline(never)]
+pub fn fast_grow<M: Map + ?Sized>(
+    m: &mut M,
+    k: &mut Known,
+    grow: &Grow,
+    w: &mut Grown,
+    tests: &mut u32,
+) -> u32 {
+    if !k.fast_grow_may() {
+        return 0;
+    }
+    let l0 = limit(grow.goal[0], grow.reach[0], w.window[0]);
+    let l1 = limit(grow.goal[1], grow.reach[1], w.window[1]);
+    let start = *tests;
+    if !rect_free_known(m, k, l0, l1, tests) || *tests - start > grow.budget {
+        return 0;
+    }
+    w.window = [l0, l1];
+    1
+}
+
 /// Grows the free rectangle `w.window` (the base, on entry) toward `grow.goal`: one column
 /// (axis 1), then one row (axis 2), alternately (fig. V.5's scans "1", "2", ...), each over
 /// the window's current extent along the other axis, until each axis covers the goal, meets
@@ -642,7 +931,7 @@ pub fn grow<M: Map + ?Sized>(
             // Once the columns are done the rows' extent along theta1 stays: the rows left
             // go as one run (a step a row cost the 68020 ~400 cycles besides the reads).
             done |= if done == 1 {
-                rows_run(m, grow, w, grow.budget - used, tests)
+                rows_run(m, k, grow, w, grow.budget - used, tests)
             } else {
                 step(m, k, grow, w, ax, tests)
             } << ax;
@@ -657,6 +946,7 @@ pub fn grow<M: Map + ?Sized>(
 #[inline(never)]
 fn rows_run<M: Map + ?Sized>(
     m: &mut M,
+    k: &mut Known,
     grow: &Grow,
     w: &mut Grown,
     left: u32,
@@ -665,9 +955,9 @@ fn rows_run<M: Map + ?Sized>(
     // The direction as a type: one branch on it (a second one, on the compare's flags
     // kept across a register copy, was miscompiled: docs/toolchain.md class 1).
     if grow.goal[1].hi > w.window[1].hi {
-        rows_toward::<M, true>(m, grow, w, left, tests)
+        rows_toward::<M, true>(m, k, grow, w, left, tests)
     } else {
-        rows_toward::<M, false>(m, grow, w, left, tests)
+        rows_toward::<M, false>(m, k, grow, w, left, tests)
     }
 }
 
@@ -675,6 +965,7 @@ fn rows_run<M: Map + ?Sized>(
 #[inline(never)]
 fn rows_toward<M: Map + ?Sized, const UP: bool>(
     m: &mut M,
+    k: &mut Known,
     grow: &Grow,
     w: &mut Grown,
     left: u32,
@@ -701,28 +992,41 @@ fn rows_toward<M: Map + ?Sized, const UP: bool>(
         n = 1;
     }
     let n = n as u32;
-    let [(a0, n0), (a1, n1)] = w.window[0].runs();
-    let free = if UP {
-        // At most two runs of rows that do not wrap.
-        let b = ((cur.hi + 1) as u32) & (SIDE - 1);
-        let first = n.min(SIDE - b);
-        let mut f = m.free_rows(b, first, a0, n0, a1, n1);
-        if f == first && n > first {
-            f += m.free_rows(0, n - first, a0, n0, a1, n1);
-        }
-        f
-    } else {
-        let mut f = 0;
-        while f < n {
-            let b = ((cur.lo - 1 - f as i32) as u32) & (SIDE - 1);
-            if row_or2(m, b, a0, n0, a1, n1) != 0 {
-                break;
+    let s1 = w.window[0];
+    // The first row toward the goal (unwrapped).
+    let r0 = if UP { cur.hi + 1 } else { cur.lo - 1 };
+    let free = match k.trusted() {
+        // Rows from the first that lie in a window trusted free (`Known::begin`): only their
+        // pixels outside it are read.
+        Some(f) if f[1].lo <= r0 && r0 <= f[1].hi => {
+            let n_in = (if UP {
+                f[1].hi - cur.hi
+            } else {
+                cur.lo - f[1].lo
+            } as u32)
+                .min(n);
+            let [l1, r1] = outside(s1, f[0]);
+            let mut free_in = n_in;
+            if count(l1) != 0 {
+                free_in = free_in.min(rows_over::<M, UP>(m, r0, n_in, l1, tests));
             }
-            f += 1;
+            if count(r1) != 0 {
+                free_in = free_in.min(rows_over::<M, UP>(m, r0, n_in, r1, tests));
+            }
+            k.vouch(count(within(s1, f[0])) * free_in);
+            if free_in < n_in || n_in == n {
+                free_in
+            } else {
+                let next = if UP {
+                    r0 + n_in as i32
+                } else {
+                    r0 - n_in as i32
+                };
+                n_in + rows_over::<M, UP>(m, next, n - n_in, s1, tests)
+            }
         }
-        f
+        _ => rows_over::<M, UP>(m, r0, n, s1, tests),
     };
-    *tests += width * (free + 1).min(n);
     if UP {
         w.window[1].hi += free as i32;
     } else {
@@ -733,6 +1037,42 @@ fn rows_toward<M: Map + ?Sized, const UP: bool>(
         return 1;
     }
     0
+}
+
+/// How many of the `n` rows from unwrapped row `r0` upward (`UP`) or downward, from the
+/// first, are free over the pixels of `s` (not empty); rows past the first that is not are
+/// not read. Adds the words read to `tests`.
+#[inline(never)]
+fn rows_over<M: Map + ?Sized, const UP: bool>(
+    m: &mut M,
+    r0: i32,
+    n: u32,
+    s: Span,
+    tests: &mut u32,
+) -> u32 {
+    let [(a0, n0), (a1, n1)] = s.runs();
+    let free = if UP {
+        // At most two runs of rows that do not wrap.
+        let b = (r0 as u32) & (SIDE - 1);
+        let first = n.min(SIDE - b);
+        let mut f = m.free_rows(b, first, a0, n0, a1, n1);
+        if f == first && n > first {
+            f += m.free_rows(0, n - first, a0, n0, a1, n1);
+        }
+        f
+    } else {
+        let mut f = 0;
+        while f < n {
+            let b = ((r0 - f as i32) as u32) & (SIDE - 1);
+            if row_or2(m, b, a0, n0, a1, n1) != 0 {
+                break;
+            }
+            f += 1;
+        }
+        f
+    };
+    *tests += s.len() * (free + 1).min(n);
+    free
 }
 
 /// One column (`ax` 0) or row (`ax` 1) toward the goal. Returns 1 when that axis is done.
@@ -762,7 +1102,7 @@ fn step<M: Map + ?Sized>(
     let free = if ax == 0 {
         col_free_known(m, k, next, other, tests)
     } else {
-        window_row_free(m, next, other, tests)
+        window_row_free(m, k, next, other, tests)
     };
     if !free {
         w.blocked[ax] = true;
@@ -845,6 +1185,186 @@ mod tests {
         assert!(!ask(&mut g, &mut k, 120, 12).0);
         assert_eq!(ask(&mut g, &mut k, 126, 5), (false, 0));
         assert!(ask(&mut g, &mut k, 120, 10).0);
+    }
+
+    /// One pass's window over `g`'s map from base `b`: `fast_grow` first when `fast`, then
+    /// the base and the steps; `None` when the base is not free. Returns the window and
+    /// whether `fast_grow` took it.
+    fn pass_window(
+        g: &mut vme_map::ArrayBus,
+        k: &mut Known,
+        grow_to: &Grow,
+        b: [Span; 2],
+        fast: bool,
+    ) -> (Option<Grown>, bool) {
+        let mut m = BusMap(g);
+        let mut tests = 0;
+        let mut w = Grown {
+            window: b,
+            blocked: [false, false],
+        };
+        if fast && fast_grow(&mut m, k, grow_to, &mut w, &mut tests) != 0 {
+            return (Some(w), true);
+        }
+        if !rect_free_known(&mut m, k, b[0], b[1], &mut tests) {
+            return (None, false);
+        }
+        grow(&mut m, k, grow_to, &mut w, &mut tests);
+        (Some(w), false)
+    }
+
+    /// Whether every span of `a` holds the matching span of `b`.
+    fn holds(a: &Grown, b: &Grown) -> bool {
+        (0..2).all(|i| a.window[i].lo <= b.window[i].lo && b.window[i].hi <= a.window[i].hi)
+    }
+
+    /// The rows a window grows by once its columns are done (`rows_run`), read only outside
+    /// a window trusted free: the first row past the trusted window is read, across all of
+    /// the window's columns, and a mark there stops the growth, upward and downward.
+    #[test]
+    fn rows_past_a_trusted_window_are_read() {
+        use vme_map::layout::{cspace_counter, raise_column_gen, CSPACE_MAP, CSPACE_MAP_BYTES};
+        use vme_map::GlobalBus;
+        for (up, mark_row, goal) in [(true, 20, span(30, 5)), (false, -6, span(-20, 5))] {
+            let mut mem = vec![0u8; (CSPACE_MAP + CSPACE_MAP_BYTES) as usize];
+            let mut g = vme_map::ArrayBus::new(&mut mem);
+            g.write_u32(cspace_counter(5, mark_row as u32 & 127, 0), 1);
+            raise_column_gen(&mut g, 5);
+            let mut k = Known::new();
+            k.begin(&mut BusMap(&mut g));
+            k.proved_free(&Grown {
+                window: [span(0, 11), span(-5, 25)],
+                blocked: [false, true],
+            });
+            k.begin(&mut BusMap(&mut g));
+            assert!(k.trusted().is_some());
+            let base = [span(2, 7), span(5, 11)];
+            let grow_to = Grow {
+                goal: [span(3, 3), goal],
+                reach: [span(0, 11), span(-30, 80)],
+                budget: 1024,
+            };
+            let mut w = Grown {
+                window: base,
+                blocked: [false, false],
+            };
+            let mut tests = 0;
+            grow(&mut BusMap(&mut g), &mut k, &grow_to, &mut w, &mut tests);
+            let edge = if up {
+                w.window[1].hi + 1
+            } else {
+                w.window[1].lo - 1
+            };
+            assert_eq!((edge, w.blocked), (mark_row, [false, true]), "{w:?}");
+            // The rows inside the trusted window were vouched for: only those past it read.
+            assert_eq!(tests, 7, "{w:?}");
+        }
+    }
+
+    /// A pass that trusts the window the last pass proved free (`Known::begin`, the map's
+    /// epoch unmoved) grows the window the steps grow over a map read afresh: the window
+    /// taken at once (`fast_grow`) and the steps over the trusted window alike, on random
+    /// maps (each write's column raised), bases next to the last pass's, goals and reaches.
+    /// With no budget the windows and blocked flags are equal; with the reflex's budget the
+    /// trusting pass, reading fewer words, stops no earlier (its window holds the other's,
+    /// and is equal where the budget did not cut the steps short).
+    #[test]
+    fn a_trusted_window_grows_as_the_steps() {
+        use vme_map::layout::{cspace_counter, raise_column_gen, CSPACE_MAP, CSPACE_MAP_BYTES};
+        use vme_map::GlobalBus;
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = |n: i32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as i32
+        };
+        let (mut fast_taken, mut trusted, mut cut) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let mut mem = vec![0u8; (CSPACE_MAP + CSPACE_MAP_BYTES) as usize];
+            let mut g = vme_map::ArrayBus::new(&mut mem);
+            let base0 = [
+                span(rnd(280) - 140, 1 + rnd(40)),
+                span(rnd(280) - 140, 1 + rnd(60)),
+            ];
+            // Marks about the base, where the windows grow.
+            for _ in 0..rnd(12) {
+                let i1 = (base0[0].lo + rnd(100) - 30) as u32 & 127;
+                let i2 = (base0[1].lo + rnd(120) - 30) as u32 & 127;
+                g.write_u32(cspace_counter(i1, i2, 0), 1);
+                raise_column_gen(&mut g, i1);
+            }
+            let goal = [
+                span(base0[0].lo + rnd(120) - 60, 1 + rnd(20)),
+                span(base0[1].lo + rnd(120) - 60, 1 + rnd(20)),
+            ];
+            let (d1, d2) = (rnd(30), rnd(30));
+            let grow_at = |b: [Span; 2], budget: u32| Grow {
+                goal,
+                reach: [
+                    Span {
+                        lo: b[0].lo - d1,
+                        hi: b[0].hi + d2,
+                    },
+                    Span {
+                        lo: b[1].lo - d2,
+                        hi: b[1].hi + d1,
+                    },
+                ],
+                budget,
+            };
+            // The last pass proves its window.
+            let mut k = Known::new();
+            k.begin(&mut BusMap(&mut g));
+            if let (Some(w0), _) = pass_window(&mut g, &mut k, &grow_at(base0, 1024), base0, false)
+            {
+                k.proved_free(&w0);
+            }
+            // This pass: the base moved by a pixel or two, or grew or shrank by one.
+            let b = [
+                Span {
+                    lo: base0[0].lo + rnd(5) - 2,
+                    hi: base0[0].hi + rnd(3) - 1,
+                },
+                Span {
+                    lo: base0[1].lo + rnd(5) - 2,
+                    hi: base0[1].hi + rnd(3) - 1,
+                },
+            ];
+            if b[0].hi < b[0].lo || b[1].hi < b[1].lo {
+                continue;
+            }
+            for budget in [u32::MAX, 1024] {
+                let gr = grow_at(b, budget);
+                let mut kt = k.clone();
+                kt.begin(&mut BusMap(&mut g));
+                trusted += (kt.free_ok != 0) as u32;
+                let (wt, fast) = pass_window(&mut g, &mut kt, &gr, b, true);
+                let (wr, _) = pass_window(&mut g, &mut Known::new(), &gr, b, false);
+                assert_eq!(wt.is_some(), wr.is_some(), "{b:?} {gr:?}");
+                let (Some(wt), Some(wr)) = (wt, wr) else {
+                    continue;
+                };
+                fast_taken += fast as u32;
+                if budget == u32::MAX {
+                    assert_eq!(wt, wr, "{b:?} {gr:?} fast {fast}");
+                } else {
+                    let (wu, _) =
+                        pass_window(&mut g, &mut Known::new(), &grow_at(b, u32::MAX), b, false);
+                    assert!(holds(&wt, &wr), "{wt:?} {wr:?}");
+                    if Some(wr) == wu {
+                        assert_eq!(wt, wr, "{b:?} {gr:?} fast {fast}");
+                    } else {
+                        cut += 1;
+                    }
+                }
+            }
+        }
+        eprintln!("{fast_taken} taken at once, {trusted} trusting, {cut} cut by the budget");
+        assert!(
+            fast_taken > 5000 && trusted > 10_000,
+            "{fast_taken} taken at once, {trusted} trusting, {cut} cut by the budget"
+        );
     }
 
     proptest! {

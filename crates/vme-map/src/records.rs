@@ -391,7 +391,8 @@ record! {
         pub tests: u32,
         /// Pixels the pass vouched for without reading them: rows of columns read free in
         /// an earlier pass whose generation word has not moved since
-        /// (`layout::CSPACE_GENS`).
+        /// (`layout::CSPACE_GENS`), and pixels of the window an earlier pass proved free
+        /// while the map's epoch has not moved (`layout::CSPACE_EPOCH`).
         pub known: u32,
         /// Servo-clock time since the previous pass.
         pub dt_us: u32,
