@@ -796,10 +796,11 @@ impl Reflex {
         // The window the steps would grow, all at once when it is free (it holds the base),
         // after a pass whose window grew unblocked with the map unwritten since
         // (`window::fast_grow`); else the base, then the steps.
+        let (g, s, t) = (&goal_urad, &mut sub, &mut tests);
         let free = (self.known.fast_grow_may()
-            && self.fast_window(map, &a1, &a2, keep, &goal_urad, out, &mut sub, &mut tests))
-            || (window::rect_free_known(map, &mut self.known, a1.base, a2.base, &mut tests)
-                && self.grow_window(map, &a1, &a2, keep, &goal_urad, out, &mut sub, &mut tests));
+            && self.base_window::<M, true>(map, &a1, &a2, keep, g, out, s, t))
+            || (window::rect_free_known(map, &mut self.known, a1.base, a2.base, t)
+                && self.base_window::<M, false>(map, &a1, &a2, keep, g, out, s, t));
         if !free {
             self.base_blocked(
                 sv, &a1, &a2, &goal_urad, clear_px, moving, map, out, &mut sub, &mut tests,
@@ -815,41 +816,15 @@ impl Reflex {
         out.subgoal_urad = Some(sub);
     }
 
-    /// The window [`window::fast_grow`] takes at once, if it does: then the subgoal `sub`,
-    /// the flags and the window into `out` ([`Reflex::take_window`]), and true. Apart from
-    /// [`Reflex::window`], as [`Reflex::grow_window`].
-    #[inline(never)]
-    #[allow(clippy::too_many_arguments)]
-    fn fast_window<M: Map + ?Sized>(
-        &mut self,
-        map: &mut M,
-        a1: &Axis,
-        a2: &Axis,
-        keep: i32,
-        goal_urad: &[i32; 2],
-        out: &mut Output,
-        sub: &mut [i32; 2],
-        tests: &mut u32,
-    ) -> bool {
-        let g = growth(a1, a2, keep);
-        let mut grown = Grown {
-            window: [a1.base, a2.base],
-            blocked: [false, false],
-        };
-        if window::fast_grow(map, &mut self.known, &g, &mut grown, tests) == 0 {
-            return false;
-        }
-        self.take_window(&grown, a1, a2, keep, goal_urad, out, sub);
-        true
-    }
-
-    /// The window grown from a free base rectangle (`window::grow`): the subgoal `sub`, the
-    /// flags and the window into `out` ([`Reflex::take_window`]); true. Apart from
+    /// The pass's window from a base rectangle: with `FAST` the window
+    /// [`window::fast_grow`] takes at once, if it does (false when it does not), else the
+    /// window grown from a base known free (`window::grow`); then the subgoal `sub`, the
+    /// flags and the window into `out` ([`Reflex::take_window`]), and true. Apart from
     /// [`Reflex::window`]: inlined there, branches of the rest tested the flags of a
     /// register copy (docs/toolchain.md, class 1).
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
-    fn grow_window<M: Map + ?Sized>(
+    fn base_window<M: Map + ?Sized, const FAST: bool>(
         &mut self,
         map: &mut M,
         a1: &Axis,
@@ -865,7 +840,13 @@ impl Reflex {
             window: [a1.base, a2.base],
             blocked: [false, false],
         };
-        window::grow(map, &mut self.known, &g, &mut grown, tests);
+        if FAST {
+            if window::fast_grow(map, &mut self.known, &g, &mut grown, tests) == 0 {
+                return false;
+            }
+        } else {
+            window::grow(map, &mut self.known, &g, &mut grown, tests);
+        }
         self.take_window(&grown, a1, a2, keep, goal_urad, out, sub);
         true
     }

@@ -608,7 +608,8 @@ pub fn rect_free_known<M: Map + ?Sized>(
     if !m.has_gens() {
         return rect_free(m, s1, s2, tests);
     }
-    if let Some(f) = k.trusted() {
+    if k.free_ok != 0 {
+        let f = k.free;
         return rect_free_trusting(m, k, &f, s1, s2, tests);
     }
     columns_free(m, k, s1, s2, tests)
@@ -744,7 +745,8 @@ pub fn col_free_known<M: Map + ?Sized>(
         return col_free(m, i1, s2, tests);
     }
     let c = Span { lo: i1, hi: i1 };
-    if let Some(f) = k.trusted() {
+    if k.free_ok != 0 {
+        let f = k.free;
         return rect_free_trusting(m, k, &f, c, s2, tests);
     }
     rect_free_columns(m, k, c, s2, tests)
