@@ -547,6 +547,18 @@ fn the_cspace_image_moves_images_like_draw_then_erase() {
                 "{old:?} -> {new:?}: column {c} raised {gen} times, drawn {wrote}, changed {changed}"
             );
         }
+        // And the map's epoch with every one of those raises (the reflex trusts a window it
+        // proved free while the epoch stays).
+        let word = |o: u32| {
+            let o = o as usize;
+            u32::from_be_bytes([global[o], global[o + 1], global[o + 2], global[o + 3]])
+        };
+        let raises: u32 = (0..128).map(|c| word(vme_map::layout::cspace_gen(c))).sum();
+        assert_eq!(
+            word(vme_map::layout::CSPACE_EPOCH),
+            raises,
+            "{old:?} -> {new:?}: the epoch against the generations' raises"
+        );
         moved += 1;
     }
     assert!(moved > 100, "only {moved} moves had images");

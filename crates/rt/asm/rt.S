@@ -242,6 +242,26 @@ __vme_raise32:
     bne.s   1b
     rts
 
+/* ---- two atomic raises: a column's generation, then the map's epoch ----
+ * void __vme_raise32_then(u32 *first, u32 *then) (GlobalBus::raise_u32_then): *first += 1,
+ * then *then += 1, each as __vme_raise32. */
+    .section .text.__vme_raise32_then, "ax"
+    .globl __vme_raise32_then
+__vme_raise32_then:
+    movea.l 4(%sp), %a0
+    move.l  (%a0), %d0
+1:  move.l  %d0, %d1
+    addq.l  #1, %d1
+    cas.l   %d0, %d1, (%a0)
+    bne.s   1b
+    movea.l 8(%sp), %a0
+    move.l  (%a0), %d0
+2:  move.l  %d0, %d1
+    addq.l  #1, %d1
+    cas.l   %d0, %d1, (%a0)
+    bne.s   2b
+    rts
+
 /* ---- leading zero words: the free rows of a C-space column (GlobalBus::zero_run) ----
  * u32 __vme_zero_run(const u32 *addr, u32 n, u32 stride): how many of the n words stride
  * bytes apart are zero before the first that is not (n when none is). */

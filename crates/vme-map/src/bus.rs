@@ -34,6 +34,13 @@ pub trait GlobalBus {
             v = found;
         }
     }
+    /// Raises the word at `first`, then the word at `then`, each as [`GlobalBus::raise_u32`]:
+    /// a column's generation and the map's epoch (`layout::raise_column_gen`), in one call
+    /// of the runtime's assembly on the 68020.
+    fn raise_u32_then(&mut self, first: u32, then: u32) {
+        self.raise_u32(first);
+        self.raise_u32(then);
+    }
     /// The bitwise or of `n` aligned words from `off`, `stride` bytes apart: a row or a
     /// column of the C-space map tested for obstacles in one call (the reflex's inner loop;
     /// on the 68020 a two-instruction loop in the runtime's assembly).
@@ -190,6 +197,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn raise_u32(&mut self, off: u32) {
         (**self).raise_u32(off)
+    }
+    fn raise_u32_then(&mut self, first: u32, then: u32) {
+        (**self).raise_u32_then(first, then)
     }
     fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {
         (**self).or_words(off, n, stride)
@@ -363,6 +373,15 @@ impl GlobalBus for MmioGlobal {
         }
         // SAFETY: an aligned, mapped global RAM word; the loop touches only that word.
         unsafe { __vme_raise32(Self::ptr::<u32>(off)) }
+    }
+    #[inline(always)]
+    fn raise_u32_then(&mut self, first: u32, then: u32) {
+        extern "C" {
+            // Two `CAS.L` loops in the runtime's assembly (crates/rt/asm/rt.S).
+            fn __vme_raise32_then(first: *mut u32, then: *mut u32);
+        }
+        // SAFETY: aligned, mapped global RAM words; the loops touch only those words.
+        unsafe { __vme_raise32_then(Self::ptr::<u32>(first), Self::ptr::<u32>(then)) }
     }
     #[inline(always)]
     fn or_words(&mut self, off: u32, n: u32, stride: u32) -> u32 {

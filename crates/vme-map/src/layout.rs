@@ -242,8 +242,7 @@ pub const CSPACE_EPOCH: u32 = CSPACE_GENS + CSPACE_GENS_BYTES;
 /// map's epoch ([`CSPACE_EPOCH`]). Call after the column's words are written.
 #[inline(always)]
 pub fn raise_column_gen<G: crate::GlobalBus + ?Sized>(g: &mut G, i1: u32) {
-    g.raise_u32(cspace_gen(i1));
-    g.raise_u32(CSPACE_EPOCH);
+    g.raise_u32_then(cspace_gen(i1), CSPACE_EPOCH);
 }
 
 /// First log ring.
