@@ -818,8 +818,9 @@ impl Reflex {
 
     /// The pass's window from a base rectangle: with `FAST` the window
     /// [`window::fast_grow`] takes at once, if it does (false when it does not), else the
-    /// window grown from a base known free (`window::grow`); then the subgoal `sub`, the
-    /// flags and the window into `out` ([`Reflex::take_window`]), and true. Apart from
+    /// window grown from a base known free (`window::grow`); then the window kept as proved
+    /// free (`Known::proved_free`), the goal clamped into it as the subgoal `sub`, the
+    /// flags and the window into `out`, and true. Apart from
     /// [`Reflex::window`]: inlined there, branches of the rest tested the flags of a
     /// register copy (docs/toolchain.md, class 1).
     #[inline(never)]
@@ -847,26 +848,8 @@ impl Reflex {
         } else {
             window::grow(map, &mut self.known, &g, &mut grown, tests);
         }
-        self.take_window(&grown, a1, a2, keep, goal_urad, out, sub);
-        true
-    }
-
-    /// Window `grown`, proved free, as the pass's: kept for the next passes
-    /// (`Known::proved_free`), into `out` with its blocked flags, and the goal clamped into
-    /// it as the subgoal `sub`.
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn take_window(
-        &mut self,
-        grown: &Grown,
-        a1: &Axis,
-        a2: &Axis,
-        keep: i32,
-        goal_urad: &[i32; 2],
-        out: &mut Output,
-        sub: &mut [i32; 2],
-    ) {
-        self.known.proved_free(grown);
+        // Proved free: kept for the next passes, and the goal clamped into it.
+        self.known.proved_free(&grown);
         let (w1, w2) = (grown.window[0], grown.window[1]);
         out.window = [(w1.lo, w1.hi), (w2.lo, w2.hi)];
         out.flags |= flags::BLOCKED1 & (grown.blocked[0] as u32).wrapping_neg();
@@ -874,6 +857,7 @@ impl Reflex {
         sub[0] = clamp_into(goal_urad[0], a1.goal, w1, keep);
         sub[1] = clamp_into(goal_urad[1], a2.goal, w2, keep);
         self.free_here(a1, a2);
+        true
     }
 
     /// The pass's subgoal `sub` when the base rectangle is not free (the rest of
