@@ -244,7 +244,9 @@ __vme_raise32:
 
 /* ---- two atomic raises: a column's generation, then the map's epoch ----
  * void __vme_raise32_then(u32 *first, u32 *then) (GlobalBus::raise_u32_then): *first += 1,
- * then *then += 1, each as __vme_raise32. */
+ * then *then += 1, each as __vme_raise32. The loop written twice: entered by BSR into
+ * __vme_raise32's, the job cost what two calls cost (bench cspace worst 313,673 cycles
+ * against 311,867 inline and 313,469 as two calls). */
     .section .text.__vme_raise32_then, "ax"
     .globl __vme_raise32_then
 __vme_raise32_then:
