@@ -463,31 +463,20 @@ __vme_free_rows:
 
 /* ---- nonzero words as bits: a row of the planner's bitmap (vme-map's GlobalBus::nonzero_bits)
  * u32 __vme_nonzero_bits(const u32 *addr): bit k set when the k-th of the 32 consecutive
- * words from addr is nonzero. TST.L (An)+ and BSET, four words a pass. */
+ * words from addr is nonzero. The words from the last down: NEG.L sets X when its operand
+ * is nonzero and ADDX.L shifts X in at bit 0, so the first word's bit ends at bit 0; no
+ * branch and no bit index (the TST.L / BSET loop took ~600 cycles a row). */
     .section .text.__vme_nonzero_bits, "ax"
     .globl __vme_nonzero_bits
 __vme_nonzero_bits:
     movea.l 4(%sp), %a0
+    lea     128(%a0), %a0
     moveq   #0, %d0
-    moveq   #0, %d1             /* bit index */
-1:  tst.l   (%a0)+
-    beq.s   2f
-    bset    %d1, %d0
-2:  addq.l  #1, %d1
-    tst.l   (%a0)+
-    beq.s   3f
-    bset    %d1, %d0
-3:  addq.l  #1, %d1
-    tst.l   (%a0)+
-    beq.s   4f
-    bset    %d1, %d0
-4:  addq.l  #1, %d1
-    tst.l   (%a0)+
-    beq.s   5f
-    bset    %d1, %d0
-5:  addq.l  #1, %d1
-    cmpi.l  #32, %d1
-    bne.s   1b
+    .rept 32
+    move.l  -(%a0), %d1
+    neg.l   %d1
+    addx.l  %d0, %d0
+    .endr
     rts
 
 /* ---- unsigned remainder (crates/fx::rem_u32) ----
