@@ -67,6 +67,8 @@ pub struct Scratch {
     /// The generations of the window's columns (`Map::column_gen`) when it was last
     /// loaded, window column `k` at index `k`.
     gens: [u32; WIN],
+    /// The map's epoch ([`Map::epoch`]) read just before `gens` were.
+    gens_epoch: u32,
     /// The last plan's ask and result, kept while neither the ask nor a column of the
     /// window changes (then the plan is the same: it depends on nothing else).
     memo_ask: Ask,
@@ -105,6 +107,7 @@ impl Scratch {
             t: [0; 2],
             step: [0; 2],
             gens: [0; WIN],
+            gens_epoch: 0,
             memo_ask: Ask {
                 at_px: [0; 2],
                 toward_px: [0; 2],
@@ -206,19 +209,31 @@ fn replan<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask, tests: &mut u3
 }
 
 /// Whether `ask` is the last plan's and no column of its window has been written since
-/// (-1), reading the window's generations into `s.gens` (on a map without generations:
-/// never, 0).
+/// (-1), reading the window's generations into `s.gens` unless the map's epoch says no
+/// column at all was written since they were read (on a map without generations: never,
+/// 0).
 #[inline(never)]
 fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
     if !m.has_gens() {
         return 0;
     }
+    let same_ask = -((*ask == s.memo_ask) as i32) & s.memo_valid;
+    // The epoch before the generations: while it stays, no column was written since the
+    // pass that read `s.gens` (up to a write in progress, seen the next pass as for the
+    // generations), and the ask's window is the memo's (~600 cycles of an escape's pass on
+    // the 68020 in `__reflex_gens_moved`).
+    let e = m.epoch();
+    let d = e ^ s.gens_epoch;
+    let unwritten = ((d | d.wrapping_neg()) as i32 >> 31) ^ -1;
+    if same_ask & unwritten != 0 {
+        return -1;
+    }
+    s.gens_epoch = e;
     // The window's first column, in 0..128 (the arm's pixel is unwrapped).
     let c0 = ((ask.at_px[0] - HALF) & 127) as u32;
     let moved = gens_moved(m, c0, &mut s.gens);
     let unmoved = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
-    let same_ask = -((*ask == s.memo_ask) as i32);
-    unmoved & same_ask & s.memo_valid
+    unmoved & same_ask
 }
 
 /// Whether a column of the `WIN` from `c0` (wrapping) was written since their generations
