@@ -766,6 +766,9 @@ enum KnownOp {
         lo2: i32,
         n2: i32,
     },
+    /// The last rectangle asked again, in a pass of its own (what a reflex braking or
+    /// escaping asks pass after pass: `Known`'s blocked rectangles).
+    Again,
 }
 
 fn known_op() -> impl Strategy<Value = KnownOp> {
@@ -794,6 +797,7 @@ fn known_op() -> impl Strategy<Value = KnownOp> {
             }
         ),
         (-20i32..20, -20i32..20, 1i32..140).prop_map(|(i1, lo2, n2)| KnownOp::Col { i1, lo2, n2 }),
+        Just(KnownOp::Again),
     ]
 }
 
@@ -812,14 +816,24 @@ fn known_ops_answer_as_full_reads(
         gram.write(i1, i2, false, 1);
     }
     let mut k = window::Known::new();
+    let mut last: Option<KnownOp> = None;
     for op in ops {
-        match *op {
+        let op = match (op, &last) {
+            (KnownOp::Again, Some(r)) => r.clone(),
+            (KnownOp::Rect { .. }, _) => {
+                last = Some(op.clone());
+                op.clone()
+            }
+            _ => op.clone(),
+        };
+        match op {
             KnownOp::Write {
                 i1,
                 i2,
                 stripe,
                 set,
             } => gram.write(i1, i2, stripe, set as u32),
+            KnownOp::Again => {}
             KnownOp::Rect {
                 lo1,
                 n1,
@@ -989,6 +1003,60 @@ proptest! {
             }
         }
     }
+}
+
+/// A rectangle read blocked is answered blocked again, without the known columns, while
+/// the map's epoch stays (`Known`'s blocked rectangles, two kept), and read again once it
+/// moves. Seen through a write in progress: a mark cleared and its column's generation
+/// raised, the epoch not yet, which the known columns see at once and the kept rectangles
+/// only once the epoch is raised.
+#[test]
+fn a_blocked_rectangle_is_answered_again_while_the_map_stays() {
+    use vme_map::{layout, GlobalBus};
+    let mut gram = Gram::new();
+    gram.write(15, 35, false, 1);
+    let mut k = window::Known::new();
+    let span = |lo, hi| Span { lo, hi };
+    let (r1, r2, r3) = (
+        [span(10, 19), span(30, 49)],
+        [span(14, 16), span(34, 36)],
+        [span(15, 15), span(0, 127)],
+    );
+    // Each question a pass of its own (`Known::begin`).
+    let mut free = |gram: &mut Gram, r: [Span; 2]| {
+        let mut g = gram.bus();
+        let mut m = window::BusMap(&mut g);
+        k.begin(&mut m);
+        window::rect_free_known(&mut m, &mut k, r[0], r[1], &mut 0)
+    };
+    let raise = |gram: &mut Gram, off: u32| {
+        let mut g = gram.bus();
+        let v = g.read_u32(off);
+        g.write_u32(off, v + 1);
+    };
+    assert!(!free(&mut gram, r1));
+    assert!(!free(&mut gram, r2));
+    // A third goes over the older of the two (r1).
+    assert!(!free(&mut gram, r3));
+    gram.bus().write_u32(layout::cspace_counter(15, 35, 0), 0);
+    raise(&mut gram, layout::cspace_gen(15));
+    assert!(!free(&mut gram, r2), "kept");
+    assert!(!free(&mut gram, r3), "kept");
+    assert!(free(&mut gram, r1), "not kept: read again");
+    raise(&mut gram, layout::CSPACE_EPOCH);
+    assert!(free(&mut gram, r2));
+    assert!(free(&mut gram, r3));
+    // Marked again (written in full): blocked, kept, and cleared in full: free.
+    gram.write(15, 35, false, 1);
+    assert!(!free(&mut gram, r2));
+    assert!(!free(&mut gram, r3));
+    gram.write(15, 35, false, 0);
+    // A rectangle read blocked after the epoch moved is kept alone: r3, read blocked
+    // before, is free now.
+    gram.write(60, 60, false, 1);
+    assert!(!free(&mut gram, [span(60, 60), span(60, 60)]));
+    assert!(free(&mut gram, r2));
+    assert!(free(&mut gram, r3));
 }
 
 /// A column written after it was read free is read again (its generation moved), and only

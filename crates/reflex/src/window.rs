@@ -352,6 +352,46 @@ pub struct Known {
     /// -1 when this pass may trust `free` (the map's epoch has not moved since it was
     /// proved), else 0.
     free_ok: i32,
+    /// Rectangles ([`rect_free_known`]'s `s1`, `s2`) read blocked, a pixel or stripe word
+    /// marked, in passes that began at map epoch `blocked_epoch`, or [`NO_RECT`]. While
+    /// the epoch stays they are blocked still: an arm escaping from an obstacle asks its
+    /// blocked rectangles again every pass (~1,100 cycles each on the 68020 through the
+    /// known columns).
+    blocked: [[Span; 2]; 2],
+    /// The map's epoch at the start of the passes that read `blocked` ([`Known::begin`]).
+    blocked_epoch: u32,
+    /// The slot of `blocked` the next rectangle read blocked goes to (the older).
+    blocked_next: u32,
+    /// Zero from a rectangle kept ([`Known::note_blocked`]) until a window is
+    /// proved free ([`Known::proved_free`]: the arm is clear, and the rectangles it asked
+    /// before are not asked again), else nonzero: only a pass after one that kept a
+    /// rectangle compares with them (a pass in free space pays no compare).
+    blocked_none: u32,
+    /// Zero when this pass may answer from `blocked` (the epoch read by [`Known::begin`]
+    /// is `blocked_epoch`); nonzero until the first `begin`, so questions asked without
+    /// one never do.
+    blocked_moved: u32,
+}
+
+/// -1 when `d` (a difference, as an exclusive or) is zero, else 0 (a mask: docs/toolchain.md
+/// class 1).
+#[inline(always)]
+fn unmoved(d: u32) -> i32 {
+    ((d | d.wrapping_neg()) as i32 >> 31) ^ -1
+}
+
+/// A rectangle no question asks ([`Known::blocked`]'s empty slot): spans start within a
+/// few turns of zero.
+const NO_RECT: [Span; 2] = [Span {
+    lo: i32::MIN,
+    hi: i32::MIN,
+}; 2];
+
+/// Nonzero when rectangle `b` is not `s1` x `s2` (as spans: the same pixels from another
+/// turn differ).
+#[inline(always)]
+fn differ(b: &[Span; 2], s1: Span, s2: Span) -> u32 {
+    ((b[0].lo ^ s1.lo) | (b[0].hi ^ s1.hi) | (b[1].lo ^ s2.lo) | (b[1].hi ^ s2.hi)) as u32
 }
 
 /// [`Known::mark`]'s value for a column with no row known marked.
@@ -389,6 +429,11 @@ impl Known {
             free_whole: 0,
             epoch: 0,
             free_ok: 0,
+            blocked: [NO_RECT; 2],
+            blocked_epoch: 0,
+            blocked_next: 0,
+            blocked_none: 1,
+            blocked_moved: 1,
         }
     }
 
@@ -405,19 +450,51 @@ impl Known {
         }
         let e = m.epoch();
         self.epoch = e;
-        let moved = e ^ self.free_epoch;
-        // -1 when unmoved (a mask: docs/toolchain.md class 1).
-        let same = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
-        self.free_ok = self.free_set & same;
+        self.free_ok = self.free_set & unmoved(e ^ self.free_epoch);
+        self.blocked_moved = e ^ self.blocked_epoch;
+    }
+
+    /// Whether this pass may answer from [`Known::blocked`] (`begin`'s epoch is theirs and
+    /// one is held).
+    #[inline(always)]
+    fn blocked_ok(&self) -> bool {
+        (self.blocked_moved | self.blocked_none) == 0
+    }
+
+    /// Whether `s1` x `s2` is one of [`Known::blocked`] (-1 if so, else 0): asked only when
+    /// [`Known::blocked_ok`].
+    #[inline(always)]
+    fn blocked_before(&self, s1: Span, s2: Span) -> i32 {
+        let d0 = differ(&self.blocked[0], s1, s2);
+        let d1 = differ(&self.blocked[1], s1, s2);
+        unmoved(d0) | unmoved(d1)
+    }
+
+    /// Keeps `s1` x `s2`, just read blocked by [`rect_free_known`], for the passes after
+    /// this one to answer without the known columns while the map's epoch stays
+    /// ([`Known::blocked`]): over the older of the two kept; the other is forgotten if the
+    /// epoch moved since it was read.
+    #[inline(never)]
+    fn note_blocked(&mut self, s1: Span, s2: Span) {
+        if !self.blocked_ok() {
+            self.blocked = [NO_RECT; 2];
+        }
+        self.blocked_none = 0;
+        self.blocked_epoch = self.epoch;
+        let j = (self.blocked_next & 1) as usize;
+        self.blocked[j] = [s1, s2];
+        self.blocked_next ^= 1;
     }
 
     /// Records grown window `w` as proved free in this pass: every pixel of it, and the
     /// stripe word of every column, read free or vouched for since [`Known::begin`].
+    #[inline(always)]
     pub fn proved_free(&mut self, w: &Grown) {
         self.free = w.window;
         self.free_epoch = self.epoch;
         self.free_set = -1;
         self.free_whole = !(w.blocked[0] | w.blocked[1]) as u32;
+        self.blocked_none = 1;
     }
 
     /// Whether [`fast_grow`] may take the window at once: a window this pass trusts
@@ -595,8 +672,9 @@ impl Known {
 }
 
 /// Whether every pixel of `s1` x `s2` is free, as [`rect_free`], reading only what `k`
-/// cannot vouch for (everything, on a map without generations). Adds the words read to
-/// `tests`.
+/// cannot vouch for (everything, on a map without generations): not free at once if it is
+/// a rectangle read blocked in an earlier pass with the map unwritten since
+/// ([`Known::note_blocked`]). Adds the words read to `tests`.
 #[inline(never)]
 pub fn rect_free_known<M: Map + ?Sized>(
     m: &mut M,
@@ -608,11 +686,19 @@ pub fn rect_free_known<M: Map + ?Sized>(
     if !m.has_gens() {
         return rect_free(m, s1, s2, tests);
     }
-    if k.free_ok != 0 {
-        let f = k.free;
-        return rect_free_trusting(m, k, &f, s1, s2, tests);
+    if k.blocked_ok() && k.blocked_before(s1, s2) != 0 {
+        return false;
     }
-    columns_free(m, k, s1, s2, tests)
+    let free = if k.free_ok != 0 {
+        let f = k.free;
+        rect_free_trusting(m, k, &f, s1, s2, tests)
+    } else {
+        columns_free(m, k, s1, s2, tests)
+    };
+    if !free {
+        k.note_blocked(s1, s2);
+    }
+    free
 }
 
 /// [`rect_free_known`] through the known columns alone (`s1`, `s2` not empty).
