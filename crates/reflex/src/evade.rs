@@ -546,21 +546,41 @@ pub const TRACK_MAX_UM_S: i32 = 1_000_000;
 /// turn over the half window). Until a track holds [`TRACK_SAMPLES`] the sweep stands in.
 #[derive(Clone, Debug)]
 pub struct Tracks {
-    /// Beacon times, by obstacle and ring index.
-    t_us: [[u32; TRACK_SAMPLES]; OBSTACLES],
-    /// Positions x, micrometres.
-    x_um: [[i32; TRACK_SAMPLES]; OBSTACLES],
-    /// Positions y, micrometres.
-    y_um: [[i32; TRACK_SAMPLES]; OBSTACLES],
-    /// Samples held (at most [`TRACK_SAMPLES`]).
-    n: [u32; OBSTACLES],
-    /// Ring index of the next sample (when full, of the oldest).
-    head: [u32; OBSTACLES],
-    /// The radius of the last sample: a new one (a reading beyond the calibrated square is
-    /// the disk over its fold, centred elsewhere) starts the track over.
-    r_um: [i32; OBSTACLES],
+    /// One track per obstacle.
+    tracks: [Track; OBSTACLES],
     /// The reflex's time of the last sampling pass.
     last_us: u32,
+}
+
+/// One obstacle's track (a record per obstacle: a sample's stores go through one base
+/// address on the 68020, not an index into six arrays each).
+#[derive(Clone, Copy, Debug)]
+struct Track {
+    /// Beacon times, by ring index.
+    t_us: [u32; TRACK_SAMPLES],
+    /// Positions x, micrometres.
+    x_um: [i32; TRACK_SAMPLES],
+    /// Positions y, micrometres.
+    y_um: [i32; TRACK_SAMPLES],
+    /// Samples held (at most [`TRACK_SAMPLES`]).
+    n: u32,
+    /// Ring index of the next sample (when full, of the oldest).
+    head: u32,
+    /// The radius of the last sample: a new one (a reading beyond the calibrated square is
+    /// the disk over its fold, centred elsewhere) starts the track over.
+    r_um: i32,
+}
+
+impl Track {
+    /// No samples.
+    const EMPTY: Track = Track {
+        t_us: [0; TRACK_SAMPLES],
+        x_um: [0; TRACK_SAMPLES],
+        y_um: [0; TRACK_SAMPLES],
+        n: 0,
+        head: 0,
+        r_um: 0,
+    };
 }
 
 impl Default for Tracks {
@@ -573,12 +593,7 @@ impl Tracks {
     /// No samples.
     pub const fn new() -> Self {
         Self {
-            t_us: [[0; TRACK_SAMPLES]; OBSTACLES],
-            x_um: [[0; TRACK_SAMPLES]; OBSTACLES],
-            y_um: [[0; TRACK_SAMPLES]; OBSTACLES],
-            n: [0; OBSTACLES],
-            head: [0; OBSTACLES],
-            r_um: [0; OBSTACLES],
+            tracks: [Track::EMPTY; OBSTACLES],
             last_us: 0,
         }
     }
@@ -610,38 +625,9 @@ impl Tracks {
         let n = OBSTACLES & !early as usize;
         let mut i = 0;
         while i < n {
-            self.take(i, &obs[i]);
+            take(&mut self.tracks[i], &obs[i]);
             i += 1;
         }
-    }
-
-    /// One obstacle's sample, in sign masks (-1 yes): compiled, the branches on the
-    /// time tests left a register copy between a compare and its branch (docs/toolchain.md,
-    /// class 1; `cargo xtask images` refused the image).
-    #[inline(never)]
-    fn take(&mut self, i: usize, o: &ObstacleView) {
-        const MASK: u32 = TRACK_SAMPLES as u32 - 1;
-        let n = self.n[i] as i32;
-        let h = self.head[i];
-        let newest = self.t_us[i][(h.wrapping_sub(1) & MASK) as usize];
-        let dt = o.t_us.wrapping_sub(newest) as i32;
-        let valid = -(o.valid as i32);
-        let has = (-n) >> 31;
-        // A track read again too late, with a time that went back, or with another radius
-        // (the fold of a reading beyond the calibrated square changed) starts over.
-        let dr = o.r_um ^ self.r_um[i];
-        let resized = (dr | dr.wrapping_neg()) >> 31;
-        let stale = has & (masks::lt(TRACK_STALE_US as i32, dt) | (dt >> 31) | resized);
-        let early = has & !stale & masks::lt(dt, TRACK_GAP_US as i32);
-        let write = valid & !early;
-        let kept = masks::pick(valid & !stale, n, 0);
-        let k = (h & MASK) as usize;
-        self.t_us[i][k] = masks::pick(write, o.t_us as i32, self.t_us[i][k] as i32) as u32;
-        self.x_um[i][k] = masks::pick(write, o.x_um, self.x_um[i][k]);
-        self.y_um[i][k] = masks::pick(write, o.y_um, self.y_um[i][k]);
-        self.r_um[i] = masks::pick(write, o.r_um, self.r_um[i]);
-        self.head[i] = (h + (write & 1) as u32) & MASK;
-        self.n[i] = masks::min(kept + (write & 1), TRACK_SAMPLES as i32) as u32;
     }
 
     /// `obs` into `out`, each velocity replaced by its track's where the track is full.
@@ -650,34 +636,69 @@ impl Tracks {
         let mut i = 0;
         while i < OBSTACLES {
             out[i] = obs[i];
-            if self.n[i] as usize == TRACK_SAMPLES {
-                self.velocity(i, &mut out[i]);
+            if self.tracks[i].n as usize == TRACK_SAMPLES {
+                velocity(&self.tracks[i], &mut out[i]);
             }
             i += 1;
         }
     }
+}
 
-    /// Track `i`'s velocity (full) into `o`.
-    #[inline(never)]
-    fn velocity(&self, i: usize, o: &mut ObstacleView) {
-        const MASK: u32 = TRACK_SAMPLES as u32 - 1;
-        let h = self.head[i];
-        let (mut dt, mut dx, mut dy) = (0i32, 0i32, 0i32);
-        let mut j = 0;
-        while j < TRACK_END as u32 {
-            // The oldest samples start at the head; the newest end just before it.
-            let a = ((h + j) & MASK) as usize;
-            let b = ((h + (TRACK_SAMPLES - TRACK_END) as u32 + j) & MASK) as usize;
-            dt += self.t_us[i][b].wrapping_sub(self.t_us[i][a]) as i32;
-            dx += self.x_um[i][b] - self.x_um[i][a];
-            dy += self.y_um[i][b] - self.y_um[i][a];
-            j += 1;
-        }
-        // um per us in Q20, then um/s: x 10^6 / 2^20 = 31250 / 2^15.
-        let q = |d: i32| fx::mul_shr(fx::div_shl(d, dt, 20), 31_250, 15);
-        o.vx_um_s = masks::clamp(q(dx), -TRACK_MAX_UM_S, TRACK_MAX_UM_S);
-        o.vy_um_s = masks::clamp(q(dy), -TRACK_MAX_UM_S, TRACK_MAX_UM_S);
+/// One obstacle's sample into its track `t`, in sign masks (-1 yes): compiled, the branches on the
+/// time tests left a register copy between a compare and its branch (docs/toolchain.md,
+/// class 1; `cargo xtask images` refused the image).
+#[inline(never)]
+fn take(t: &mut Track, o: &ObstacleView) {
+    const MASK: u32 = TRACK_SAMPLES as u32 - 1;
+    // An invalid obstacle only empties its track (what the masks below give it): the
+    // sampling pass tests all of them, most often with one or two valid.
+    if !o.valid {
+        t.n = 0;
+        return;
     }
+    let n = t.n as i32;
+    let h = t.head;
+    let newest = t.t_us[(h.wrapping_sub(1) & MASK) as usize];
+    let dt = o.t_us.wrapping_sub(newest) as i32;
+    let valid = -(o.valid as i32);
+    let has = (-n) >> 31;
+    // A track read again too late, with a time that went back, or with another radius
+    // (the fold of a reading beyond the calibrated square changed) starts over.
+    let dr = o.r_um ^ t.r_um;
+    let resized = (dr | dr.wrapping_neg()) >> 31;
+    let stale = has & (masks::lt(TRACK_STALE_US as i32, dt) | (dt >> 31) | resized);
+    let early = has & !stale & masks::lt(dt, TRACK_GAP_US as i32);
+    let write = valid & !early;
+    let kept = masks::pick(valid & !stale, n, 0);
+    let k = (h & MASK) as usize;
+    t.t_us[k] = masks::pick(write, o.t_us as i32, t.t_us[k] as i32) as u32;
+    t.x_um[k] = masks::pick(write, o.x_um, t.x_um[k]);
+    t.y_um[k] = masks::pick(write, o.y_um, t.y_um[k]);
+    t.r_um = masks::pick(write, o.r_um, t.r_um);
+    t.head = (h + (write & 1) as u32) & MASK;
+    t.n = masks::min(kept + (write & 1), TRACK_SAMPLES as i32) as u32;
+}
+
+/// Track `t`'s velocity (full) into `o`.
+#[inline(never)]
+fn velocity(t: &Track, o: &mut ObstacleView) {
+    const MASK: u32 = TRACK_SAMPLES as u32 - 1;
+    let h = t.head;
+    let (mut dt, mut dx, mut dy) = (0i32, 0i32, 0i32);
+    let mut j = 0;
+    while j < TRACK_END as u32 {
+        // The oldest samples start at the head; the newest end just before it.
+        let a = ((h + j) & MASK) as usize;
+        let b = ((h + (TRACK_SAMPLES - TRACK_END) as u32 + j) & MASK) as usize;
+        dt += t.t_us[b].wrapping_sub(t.t_us[a]) as i32;
+        dx += t.x_um[b] - t.x_um[a];
+        dy += t.y_um[b] - t.y_um[a];
+        j += 1;
+    }
+    // um per us in Q20, then um/s: x 10^6 / 2^20 = 31250 / 2^15.
+    let q = |d: i32| fx::mul_shr(fx::div_shl(d, dt, 20), 31_250, 15);
+    o.vx_um_s = masks::clamp(q(dx), -TRACK_MAX_UM_S, TRACK_MAX_UM_S);
+    o.vy_um_s = masks::clamp(q(dy), -TRACK_MAX_UM_S, TRACK_MAX_UM_S);
 }
 
 /// Prepares the prediction for an arm at `theta_urad` among `obs`.
