@@ -227,6 +227,9 @@ pub struct LoopStats {
     pub max_cycles: u64,
     /// Sum of the periods (cycles).
     pub sum_cycles: u64,
+    /// Periods longer than a millisecond at [`CPU_HZ`] (the reflex's 1 kHz deadline
+    /// missed).
+    pub over_1ms: u64,
 }
 
 impl LoopStats {
@@ -239,6 +242,7 @@ impl LoopStats {
             self.min_cycles = self.min_cycles.min(p);
             self.max_cycles = self.max_cycles.max(p);
             self.sum_cycles += p;
+            self.over_1ms += (p > CPU_HZ / 1000) as u64;
             self.periods += 1;
         }
         self.last_beat = Some(now);
