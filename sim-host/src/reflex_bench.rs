@@ -142,9 +142,9 @@ struct Spec {
     /// The arm really moves: its angles advance at `omega` between the host's updates
     /// (otherwise every pass sees the same state).
     advance: bool,
-    /// Every this many ms one of the obstacles is redrawn 1 mm away (back and forth, in
-    /// turn) through the C-space boards' canvas, raising its columns' generations as a
-    /// C-space job does (0: the map never changes).
+    /// Every this many ms one of the obstacles is moved 1 mm (back and forth, in turn) as a
+    /// C-space job moves it (`cspace::worklist::move_disk`), raising the generations of
+    /// the columns whose marks changed (0: the map never changes).
     redraw_ms: u32,
 }
 
@@ -212,6 +212,8 @@ fn image_case(
     let steps = (ms / step_ms) as u32;
     let (mut tests_sum, mut known_sum, mut samples) = (0f64, 0f64, 0u64);
     let redraw_every = (redraw_ms as f64 / step_ms) as u32;
+    // A C-space board's working memory for the redraws.
+    let mut job = Box::new(cspace::worklist::Scratch::new());
     let mut redraws = 0u32;
     // Whether the passes are being timed yet (from the end of the warm-up).
     let mut timing = false;
@@ -242,16 +244,14 @@ fn image_case(
                 y_um: y * 1000,
                 r_um: r * 1000,
             };
+            // As a C-space job moves it (`worklist::move_disk`: new before old, thesis lines
+            // 1199-1210, by the images' differences), raising the generations of the
+            // columns whose marks changed.
             let mut g = sys.bus();
-            let mut canvas = cspace::BusCanvas(&mut g);
-            let (old, new) = (cspace::images(&disk(from)), cspace::images(&disk(to)));
-            let (old, new) = (
-                old.map_err(|e| format!("{e:?}"))?,
-                new.map_err(|e| format!("{e:?}"))?,
-            );
-            // New first, then the old erased (the boards' order: thesis lines 1199-1210).
-            cspace::apply(&new, &mut canvas, cspace::Op::Draw);
-            cspace::apply(&old, &mut canvas, cspace::Op::Erase);
+            match cspace::worklist::move_disk(&mut g, &disk(from), &disk(to), &mut job) {
+                Ok((_, None)) => {}
+                other => return Err(format!("{name}: the redraw failed: {other:?}")),
+            }
             redraws += 1;
         }
         feed.apply(&mut sys.bus());
