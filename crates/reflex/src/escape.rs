@@ -23,7 +23,7 @@
 //! [`Scratch`], which the caller keeps (docs/toolchain.md, class 6: no local arrays indexed
 //! in loops).
 
-use crate::masks::{abs, lt, max, min, pick};
+use crate::masks::{self, abs, lt, max, min, pick};
 use crate::window::Map;
 
 /// Rows and columns of the local window (one `u32` a row).
@@ -224,7 +224,7 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
     // the 68020 in `__reflex_gens_moved`).
     let e = m.epoch();
     let d = e ^ s.gens_epoch;
-    let unwritten = ((d | d.wrapping_neg()) as i32 >> 31) ^ -1;
+    let unwritten = masks::zero(d);
     if same_ask & unwritten != 0 {
         return -1;
     }
@@ -232,8 +232,7 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
     // The window's first column, in 0..128 (the arm's pixel is unwrapped).
     let c0 = ((ask.at_px[0] - HALF) & 127) as u32;
     let moved = gens_moved(m, c0, &mut s.gens);
-    let unmoved = ((moved | moved.wrapping_neg()) as i32 >> 31) ^ -1;
-    unmoved & same_ask
+    masks::zero(moved) & same_ask
 }
 
 /// Whether a column of the `WIN` from `c0` (wrapping) was written since their generations

@@ -27,6 +27,12 @@ pub fn max(a: i32, b: i32) -> i32 {
     pick(lt(a, b), b, a)
 }
 
+/// -1 when `d` is zero, else 0 (`d` a difference, as an exclusive or: -1 when unmoved).
+#[inline(always)]
+pub fn zero(d: u32) -> i32 {
+    ((d | d.wrapping_neg()) as i32 >> 31) ^ -1
+}
+
 /// `|a|` (`a` > `i32::MIN`).
 #[inline(always)]
 pub fn abs(a: i32) -> i32 {
@@ -61,6 +67,8 @@ mod tests {
             prop_assert_eq!(lt(a, b), if a < b { -1 } else { 0 });
             prop_assert_eq!(pick(-1, a, b), a);
             prop_assert_eq!(nonneg(a), if a >= 0 { -1 } else { 0 });
+            prop_assert_eq!(zero(a as u32), if a == 0 { -1 } else { 0 });
+            prop_assert_eq!(zero(0), -1);
             prop_assert_eq!(pick(0, a, b), b);
             let (lo, hi) = (a.min(b), a.max(b));
             prop_assert_eq!(clamp(a / 2 + b / 3, lo, hi), (a / 2 + b / 3).clamp(lo, hi));

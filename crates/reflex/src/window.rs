@@ -22,7 +22,7 @@
 //! at once when that rectangle is free ([`fast_grow`]): at top speed a column and a row to
 //! read, where the steps tested every column and row of the window again.
 
-use crate::masks::lt;
+use crate::masks::{lt, zero};
 use crate::SIDE;
 
 /// Read access to the C-space map, as wide as the hardware allows. `row_or` and `col_or`
@@ -368,16 +368,9 @@ pub struct Known {
     /// rectangle compares with them (a pass in free space pays no compare).
     blocked_none: u32,
     /// Zero when this pass may answer from `blocked` (the epoch read by [`Known::begin`]
-    /// is `blocked_epoch`); nonzero until the first `begin`, so questions asked without
-    /// one never do.
+    /// is `blocked_epoch`); nonzero until the first `begin`, so a `Known` never begun (the
+    /// probes' scripts) never does; the reflex begins every pass.
     blocked_moved: u32,
-}
-
-/// -1 when `d` (a difference, as an exclusive or) is zero, else 0 (a mask: docs/toolchain.md
-/// class 1).
-#[inline(always)]
-fn unmoved(d: u32) -> i32 {
-    ((d | d.wrapping_neg()) as i32 >> 31) ^ -1
 }
 
 /// A rectangle no question asks ([`Known::blocked`]'s empty slot): spans start within a
@@ -450,7 +443,7 @@ impl Known {
         }
         let e = m.epoch();
         self.epoch = e;
-        self.free_ok = self.free_set & unmoved(e ^ self.free_epoch);
+        self.free_ok = self.free_set & zero(e ^ self.free_epoch);
         self.blocked_moved = e ^ self.blocked_epoch;
     }
 
@@ -467,7 +460,7 @@ impl Known {
     fn blocked_before(&self, s1: Span, s2: Span) -> i32 {
         let d0 = differ(&self.blocked[0], s1, s2);
         let d1 = differ(&self.blocked[1], s1, s2);
-        unmoved(d0) | unmoved(d1)
+        zero(d0) | zero(d1)
     }
 
     /// Keeps `s1` x `s2`, just read blocked by [`rect_free_known`], for the passes after
