@@ -113,7 +113,8 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// `reflex`: after each case, its this many costliest functions (cycles a pass in
-        /// their own code, every instruction charged; 0: no profile).
+        /// their own code, every instruction charged), then those of its longest pass alone
+        /// (0: no profile).
         #[arg(long, default_value_t = 0)]
         top: usize,
     },

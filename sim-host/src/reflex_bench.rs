@@ -10,7 +10,8 @@
 //!   10 ms (the known columns read again); and escaping, with the map still (the escape
 //!   keeps its plan) and with an obstacle redrawn every 10 ms (it plans again). Free space
 //!   is the worst case for the window (thesis: the window is largest there). With `--top N`
-//!   each case's N costliest functions follow it, with their cycles and calls a pass.
+//!   each case's N costliest functions follow it, with their cycles and calls a pass, and
+//!   those of its longest pass alone (what a pass over the 1 ms deadline spends).
 //! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
 //!   (native mode): the reflex must not slow the arm.
 
@@ -43,6 +44,9 @@ pub struct ImageCase {
     /// over the measured passes (short names), costliest first, as cycles and calls per
     /// pass.
     pub top: Vec<(String, f64, f64)>,
+    /// With a profile asked for: the `top` functions of the longest pass alone (cycles and
+    /// calls in that pass), to see what a pass over the 1 ms deadline spends.
+    pub worst_top: Vec<(String, f64, f64)>,
 }
 
 impl ImageCase {
@@ -168,10 +172,11 @@ fn image_case(
         redraw_ms,
     } = *c;
     let mut sys = System::power_up(dir, &[BoardId::Reflex]).map_err(|e| e.to_string())?;
+    // Over every measured pass, and over the current pass.
     let mut per = if top > 0 {
         let image =
             crate::image::Image::load(&dir.join("reflex.elf")).map_err(|e| e.to_string())?;
-        Some(FunctionCycles::new(&image))
+        Some((FunctionCycles::new(&image), FunctionCycles::new(&image)))
     } else {
         None
     };
@@ -215,6 +220,9 @@ fn image_case(
     // A C-space board's working memory for the redraws.
     let mut job = Box::new(cspace::worklist::Scratch::new());
     let mut redraws = 0u32;
+    // The longest whole pass's costliest functions (the first timed pass began before the
+    // profile did).
+    let mut worst_top = Vec::new();
     // Whether the passes are being timed yet (from the end of the warm-up).
     let mut timing = false;
     let mut feed = Feed {
@@ -257,13 +265,23 @@ fn image_case(
         feed.apply(&mut sys.bus());
         match per.as_mut().filter(|_| timing) {
             // One instruction at a time, each charged to its function (the same cycles).
-            Some(per) => {
+            Some((per, pass)) => {
                 let end = sys.now + (step_ms * crate::emu::CPU_HZ as f64 / 1000.0) as u64;
                 let b = &mut sys.boards[0];
                 while b.cycles < end && b.state == crate::emu::RunState::Running {
                     let pc = b.cpu.pc;
+                    let (periods, max) = (b.beats.periods, b.beats.max_cycles);
                     let c = b.step(&mut sys.global);
                     per.charge(pc, c);
+                    pass.charge(pc, c);
+                    if b.beats.periods != periods {
+                        // A pass ended (its heartbeat written): the longest so far keeps
+                        // its profile (the first, begun before the timing, is not whole).
+                        if periods > 0 && b.beats.max_cycles != max {
+                            worst_top = shortest_names(pass, top, 1.0);
+                        }
+                        pass.clear();
+                    }
                 }
                 sys.now = end;
             }
@@ -321,17 +339,20 @@ fn image_case(
         over_1ms: beats.over_1ms,
         tests_per_pass: tests_sum / samples.max(1) as f64,
         known_per_pass: known_sum / samples.max(1) as f64,
-        top: per.map_or_else(Vec::new, |per| {
-            per.top_calls()
-                .into_iter()
-                .take(top)
-                .map(|(n, c, e)| {
-                    let p = passes as f64;
-                    (demangle_short(&n), c as f64 / p, e as f64 / p)
-                })
-                .collect()
+        top: per.map_or_else(Vec::new, |(per, _)| {
+            shortest_names(&per, top, passes as f64)
         }),
+        worst_top,
     })
+}
+
+/// `f`'s `top` costliest functions with short names, cycles and calls divided by `passes`.
+fn shortest_names(f: &FunctionCycles, top: usize, passes: f64) -> Vec<(String, f64, f64)> {
+    f.top_calls()
+        .into_iter()
+        .take(top)
+        .map(|(n, c, e)| (demangle_short(&n), c as f64 / passes, e as f64 / passes))
+        .collect()
 }
 
 /// The obstacles (x, y, r in mm) of the cluttered case.
@@ -560,6 +581,12 @@ pub fn report(dir: &Path, top: usize) -> Result<String, String> {
         );
         for (name, cycles, calls) in &c.top {
             let _ = writeln!(r, "    {cycles:>9.0}  {calls:>6.1}  {name}");
+        }
+        if !c.worst_top.is_empty() {
+            let _ = writeln!(r, "  the longest pass ({} cycles):", c.worst_cycles);
+            for (name, cycles, calls) in &c.worst_top {
+                let _ = writeln!(r, "    {cycles:>9.0}  {calls:>6.0}  {name}");
+            }
         }
     }
     let _ = writeln!(
