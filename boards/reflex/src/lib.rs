@@ -60,7 +60,20 @@ pub struct Board {
     /// The obstacles as sensed, for the evasion: built on the passes that ask
     /// ([`SensedMap`]).
     views: [reflex::ObstacleView; reflex::OBSTACLES],
+    /// What the tracks' last sampling pass sensed, made into views one a pass after.
+    kept: Kept,
     reflex: Reflex,
+}
+
+/// The sensed obstacles as a pass of the reflex's tracks kept them (`Map::keep_obstacles`):
+/// the object table's words, whether it was read whole, and the radii. A view is made of
+/// them on a later pass (`Map::kept_view`) as [`view`] would have made it on that pass
+/// (the calibrated square of a reading beyond it is read then: the calibration's, fixed
+/// while the boards run).
+struct Kept {
+    objects: [u32; OBJECT_WORDS],
+    ok: bool,
+    radii_um: [i32; reflex::OBSTACLES],
 }
 
 impl Default for Board {
@@ -105,6 +118,11 @@ impl Board {
                 obstacles_moving: false,
             },
             views: reflex::NO_OBSTACLES,
+            kept: Kept {
+                objects: [0; OBJECT_WORDS],
+                ok: false,
+                radii_um: [0; reflex::OBSTACLES],
+            },
             entry: 0,
             out: reflex::Output::EMPTY,
         }
@@ -170,13 +188,14 @@ impl Board {
         inp.health.fresh = 1 << self.entry;
         inp.obstacles_moving = ok && moving(&self.objects_w);
         // The obstacles' views are built when the reflex asks (among moving obstacles, on
-        // the tracks' sampling passes and the trapped ones).
+        // the trapped passes), and kept on the tracks' sampling passes.
         let mut map = SensedMap {
             map: BusMap(&mut *g),
             objects: &self.objects_w,
             ok,
             views: &mut self.views,
             built: false,
+            kept: &mut self.kept,
         };
         self.reflex.step_into(&self.input, &mut map, &mut self.out);
         let out = &self.out;
@@ -314,14 +333,15 @@ fn obstacles<G: GlobalBus>(
 
 /// One pass's C-space map in global RAM with the obstacles as sensed: the board's copy of
 /// the object table (`ok`: it read whole), made into the evasion's `views` by [`obstacles`]
-/// on the pass's first ask ([`Map::obstacle_views`]; `built` since). The map's reads are
-/// [`BusMap`]'s.
+/// on the pass's first ask ([`Map::obstacle_views`]; `built` since), and into `kept` for
+/// the tracks ([`Map::keep_obstacles`]). The map's reads are [`BusMap`]'s.
 struct SensedMap<'a, G: GlobalBus> {
     map: BusMap<'a, G>,
     objects: &'a [u32; OBJECT_WORDS],
     ok: bool,
     views: &'a mut [reflex::ObstacleView; reflex::OBSTACLES],
     built: bool,
+    kept: &'a mut Kept,
 }
 
 impl<G: GlobalBus> Map for SensedMap<'_, G> {
@@ -332,6 +352,25 @@ impl<G: GlobalBus> Map for SensedMap<'_, G> {
             self.built = true;
         }
         self.views
+    }
+    #[inline(never)]
+    fn keep_obstacles(&mut self) {
+        self.kept.objects = *self.objects;
+        self.kept.ok = self.ok;
+        let mut i = 0;
+        while i < reflex::OBSTACLES {
+            self.kept.radii_um[i] = worklist::radius(self.map.0, i as u32);
+            i += 1;
+        }
+    }
+    #[inline(never)]
+    fn kept_view(&mut self, i: usize, o: &mut reflex::ObstacleView) {
+        let k = &*self.kept;
+        let b = OBSTACLE_BEACONS[i] as usize;
+        o.valid = beacon_valid(&k.objects, b, k.ok);
+        if o.valid {
+            position(o, self.map.0, &k.objects, k.radii_um[i], b);
+        }
     }
     #[inline(always)]
     fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
@@ -399,12 +438,27 @@ fn view<G: GlobalBus>(
     let (sx, sy) = worklist::drawn_sweep_mm(g, i as u32);
     // mm over the look-ahead to um/s.
     const K: i32 = 1000 * 1000 / worklist::LOOKAHEAD_MS;
+    let r_um = worklist::radius(g, i as u32);
+    position(o, g, objects, r_um, b);
+    o.vx_um_s = sx * K;
+    o.vy_um_s = sy * K;
+}
+
+/// The position, radius and time of valid beacon `b` (radius `r_um` as the host set it)
+/// into `o`: the disk the C-space boards draw.
+#[inline(always)]
+fn position<G: GlobalBus>(
+    o: &mut reflex::ObstacleView,
+    g: &mut G,
+    objects: &[u32; OBJECT_WORDS],
+    r_um: i32,
+    b: usize,
+) {
     let (x, y) = (
         beacon_word(objects, b, 0) as i32,
         beacon_word(objects, b, 1) as i32,
     );
     let flags = beacon_word(objects, b, 3);
-    let r = worklist::radius(g, i as u32);
     // The disk the C-space boards draw: a reading beyond the calibrated square (flagged
     // extrapolated) over its fold; only such a reading has one, so only it reads the
     // square and asks `fold_of` (~500 cycles a slot a pass otherwise).
@@ -413,12 +467,10 @@ fn view<G: GlobalBus>(
     } else {
         0
     };
-    let d = worklist::drawn_disk(x, y, r, fold);
+    let d = worklist::drawn_disk(x, y, r_um, fold);
     o.x_um = d.x_um;
     o.y_um = d.y_um;
     o.r_um = d.r_um;
-    o.vx_um_s = sx * K;
-    o.vy_um_s = sy * K;
     o.t_us = beacon_word(objects, b, 2);
 }
 

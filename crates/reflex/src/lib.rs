@@ -691,8 +691,12 @@ impl Reflex {
         // Logged only on passes that got this far (a pass that holds needs no log).
         self.log.push(sv.t_us, sv.arrest_urad);
         out.goal_urad = goal;
-        if inp.obstacles_moving && self.tracks.due(self.now_us) {
-            self.tracks.update(self.now_us, map.obstacle_views());
+        if inp.obstacles_moving {
+            if self.tracks.due(self.now_us) {
+                self.tracks.update(self.now_us, map);
+            } else {
+                self.tracks.settle_one(map);
+            }
         }
         self.window(sv, goal, pass_us, inp, map, out);
     }
@@ -1011,7 +1015,7 @@ impl Reflex {
         if moving == 0 {
             return;
         }
-        self.tracks.apply(map.obstacle_views(), &mut self.tracked);
+        self.tracks.apply(map, &mut self.tracked);
         evade::prepare(&mut self.evasion, &sv.theta_urad, &self.tracked);
         let mut b = [0; 3];
         evade::best(&mut self.evasion, &self.evade_dir, &mut b);

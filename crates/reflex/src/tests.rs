@@ -211,14 +211,33 @@ fn an_arm_inside_an_obstacle_escapes_to_the_nearest_free_place() {
 }
 
 /// One pass's map (as the board hands it) whose obstacles' views are built on the pass's
-/// first ask: the passes that built them go to `built`. Its one obstacle comes at the tip of
-/// an arm at (1, 1) rad from 60 mm further out, at 0.3 m/s.
+/// first ask: the passes that built them go to `built`, those that kept them for the tracks
+/// to `kept` (what they kept in `store`, across passes as the board keeps it). Its one
+/// obstacle comes at the tip of an arm at (1, 1) rad from 60 mm further out, at 0.3 m/s.
 struct ViewsMap<'a> {
     map: SliceMap<'a>,
     pass: u32,
     asked: bool,
     built: &'a mut Vec<u32>,
+    kept: &'a mut Vec<u32>,
+    store: &'a mut ObstacleView,
     views: [ObstacleView; OBSTACLES],
+}
+
+/// [`ViewsMap`]'s obstacle on pass `pass`.
+fn coming(pass: u32) -> ObstacleView {
+    // Both links along 1 rad (the angles are absolute): the tip 0.5 m out.
+    let (ux, uy) = (1f64.cos(), 1f64.sin());
+    let (x, y) = (0.5 * ux, 0.5 * uy);
+    ObstacleView {
+        valid: true,
+        x_um: ((x + 0.06 * ux) * 1e6) as i32,
+        y_um: ((y + 0.06 * uy) * 1e6) as i32,
+        r_um: 15_000,
+        vx_um_s: (-0.3 * ux * 1e6) as i32,
+        vy_um_s: (-0.3 * uy * 1e6) as i32,
+        t_us: 1000 * pass,
+    }
 }
 
 impl Map for ViewsMap<'_> {
@@ -226,20 +245,20 @@ impl Map for ViewsMap<'_> {
         if !self.asked {
             self.asked = true;
             self.built.push(self.pass);
-            // Both links along 1 rad (the angles are absolute): the tip 0.5 m out.
-            let (ux, uy) = (1f64.cos(), 1f64.sin());
-            let (x, y) = (0.5 * ux, 0.5 * uy);
-            self.views[0] = ObstacleView {
-                valid: true,
-                x_um: ((x + 0.06 * ux) * 1e6) as i32,
-                y_um: ((y + 0.06 * uy) * 1e6) as i32,
-                r_um: 15_000,
-                vx_um_s: (-0.3 * ux * 1e6) as i32,
-                vy_um_s: (-0.3 * uy * 1e6) as i32,
-                t_us: 1000 * self.pass,
-            };
+            self.views[0] = coming(self.pass);
         }
         &self.views
+    }
+    fn keep_obstacles(&mut self) {
+        self.kept.push(self.pass);
+        *self.store = coming(self.pass);
+    }
+    fn kept_view(&mut self, i: usize, o: &mut ObstacleView) {
+        *o = if i == 0 {
+            *self.store
+        } else {
+            ObstacleView::NONE
+        };
     }
     fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32 {
         self.map.row_or(i2, i1, n)
@@ -253,10 +272,12 @@ impl Map for ViewsMap<'_> {
 }
 
 /// Runs 40 passes of an arm at rest at (1, 1) rad among moving obstacles on map `m`;
-/// returns each pass's flags and the passes that built the obstacles' views.
-fn views_built(m: &TestMap) -> (Vec<u32>, Vec<u32>) {
+/// returns each pass's flags, the passes that built the obstacles' views and those that
+/// kept them for the tracks.
+fn views_built(m: &TestMap) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
     let mut r = Reflex::default();
-    let (mut flags_k, mut built) = (Vec::new(), Vec::new());
+    let (mut flags_k, mut built, mut kept) = (Vec::new(), Vec::new(), Vec::new());
+    let mut store = ObstacleView::NONE;
     for k in 1..=40 {
         let inp = Input {
             servo: Some(servo_at([1.0, 1.0], [0.0; 2], k)),
@@ -269,40 +290,44 @@ fn views_built(m: &TestMap) -> (Vec<u32>, Vec<u32>) {
             pass: k,
             asked: false,
             built: &mut built,
+            kept: &mut kept,
+            store: &mut store,
             views: [ObstacleView::NONE; OBSTACLES],
         };
         let mut out = Output::default();
         r.step_into(&inp, &mut map, &mut out);
         flags_k.push(out.flags);
     }
-    (flags_k, built)
+    (flags_k, built, kept)
 }
 
 #[test]
 fn the_obstacles_views_are_built_only_on_the_passes_that_read_them() {
-    // Escaping from a block the map drew over the arm: only the tracks' samples read the
-    // views, every TRACK_PASS_US (8 passes of 1 ms), none in between.
+    // Escaping from a block the map drew over the arm: nothing reads the views; the tracks'
+    // samples are kept every TRACK_PASS_US (8 passes of 1 ms), none in between.
     let mut m = TestMap::new();
     let p = (1.0 / PIX).floor() as i32;
     m.block(p - 2, p + 6, p - 6, p + 6);
-    let (fl, built) = views_built(&m);
+    let (fl, built, kept) = views_built(&m);
     assert!(
         fl.iter().skip(1).all(|f| f & flags::ESCAPING != 0),
         "{fl:x?}"
     );
     let step = evade::TRACK_PASS_US / 1000;
     let due: Vec<u32> = (1..=40u32).filter(|k| k.is_multiple_of(step)).collect();
-    assert_eq!(built, due);
+    assert_eq!(built, Vec::<u32>::new());
+    assert_eq!(kept, due);
     // Trapped (every pixel marked, nowhere to escape to): the evasion reads them every
-    // pass, and they are built once a pass, the tracks' passes included.
+    // pass, and they are built once a pass; the samples are kept as before.
     let mut m = TestMap::new();
     m.block(0, 127, 0, 127);
-    let (fl, built) = views_built(&m);
+    let (fl, built, kept) = views_built(&m);
     let trapped: Vec<u32> = (1..=40u32)
         .filter(|k| fl[*k as usize - 1] & flags::TRAPPED != 0)
         .collect();
     assert!(trapped.len() > 30, "{fl:x?}");
     assert_eq!(built, trapped);
+    assert_eq!(kept, due);
     // And the evasion takes the arm out of the way of the disk the views bring on.
     assert!(fl.iter().any(|f| f & flags::EVADING != 0), "{fl:x?}");
 }

@@ -39,6 +39,18 @@ pub trait Map {
     fn obstacle_views(&mut self) -> &[crate::ObstacleView; crate::OBSTACLES] {
         &crate::NO_OBSTACLES
     }
+    /// Keeps what this pass sensed of the obstacles, for [`Map::kept_view`] on the passes
+    /// after (the tracks' samples, [`crate::evade::Tracks`]: a sampling pass keeps them,
+    /// and they are made into views one a pass). The default (no sensed obstacles) keeps
+    /// nothing.
+    fn keep_obstacles(&mut self) {}
+    /// Obstacle `i` as the last [`Map::keep_obstacles`] kept it, into `o`: `valid`, and for
+    /// a valid slot its position, radius and time as [`Map::obstacle_views`] would have
+    /// built them on that pass (the velocity is left as it was: the tracks do not read it).
+    fn kept_view(&mut self, i: usize, o: &mut crate::ObstacleView) {
+        let _ = i;
+        o.valid = false;
+    }
     /// The bitwise or of the words of pixels `i1 .. i1 + n` in row `i2` (`i1 + n <= 128`).
     fn row_or(&mut self, i2: u32, i1: u32, n: u32) -> u32;
     /// The bitwise or of the words of pixels `i2 .. i2 + n` in column `i1` (`i2 + n <= 128`).
