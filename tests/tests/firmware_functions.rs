@@ -187,6 +187,36 @@ fn nonzero_bits_matches_the_host_bus() {
     }
 }
 
+/// The escape's column reader (`__vme_nonzero_bits_strided`, the runtime's assembly)
+/// against the host's bus: runs of 1-32 words of a C-space map column (512 bytes apart)
+/// and of a row (4 bytes apart).
+#[test]
+fn nonzero_bits_strided_matches_the_host_bus() {
+    let (mut b, img, mut g) = board_of(BoardId::Reflex);
+    let f = img
+        .symbol("__vme_nonzero_bits_strided")
+        .expect("__vme_nonzero_bits_strided in the reflex image");
+    let mut rng = sim_host::sim::Rng::new(11);
+    for case in 0..200u32 {
+        let stride = if case % 4 == 0 { 4 } else { 512 };
+        let n = 1 + (rng.next_u64() % 32) as u32;
+        let off = 0x1_0000 + 4 * (rng.next_u64() % 128) as u32;
+        for k in 0..n {
+            let v = match rng.next_u64() % 4 {
+                0 => 0,
+                1 => 1 << (rng.next_u64() % 32),
+                _ => rng.next_u64() as u32 & (rng.next_u64() as u32),
+            };
+            ArrayBus::new(&mut g).write_u32(off + stride * k, v);
+        }
+        let want = ArrayBus::new(&mut g).nonzero_bits_strided(off, n, stride);
+        let last = vme_map::GLOBAL_RAM_BASE + off + (n - 1) * stride;
+        let (got, cycles) = b.call(&mut g, f, &[last, n, stride], 10_000).unwrap();
+        assert_eq!(got, want, "case {case}: {n} words {stride} bytes apart");
+        assert!(cycles < 1_000, "{cycles} cycles");
+    }
+}
+
 /// `__fx_mul_shr` (any shift) and the fixed-shift `__fx_mul_shrN` that `fx::mul_shr` calls
 /// for the shifts the firmware uses most, against the host's.
 #[test]

@@ -495,9 +495,10 @@ fn the_reflex_images_evasions_match_the_host() {
 /// sensing, C-space, servo and reflex boards, the collision oracle at every plant step
 /// (`sim-host campaign reflex` runs any seed and count), with the disks where the camera
 /// sees them (the default) and again anywhere the arm reaches.
-/// The image's `__reflex_gens_moved` (whether the escape's kept plan still stands): 0 when
-/// the window's 32 generation words, from any first column and wrapping past 127, are the
-/// saved ones, else 1 with all 32 saved anew; a word changed anywhere in the window (in
+/// The image's `__reflex_gens_moved` (whether the escape's kept plan still stands, and
+/// which window columns to read again): 0 when the window's 32 generation words, from any
+/// first column and wrapping past 127, are the saved ones, else bit k for each word k that
+/// is not, with all 32 saved anew; one or several words changed anywhere in the window (in
 /// either run of a wrapping one) or none, as the escape's Rust answers.
 #[test]
 fn the_reflex_images_window_generations_match_the_host() {
@@ -517,7 +518,17 @@ fn the_reflex_images_window_generations_match_the_host() {
         match n % 4 {
             0 => {}
             // One word of the window changed, anywhere in it.
-            1 | 2 => saved[(rng.next_f64() * N as f64) as usize] ^= 1 << (n % 31),
+            1 => saved[(rng.next_f64() * N as f64) as usize] ^= 1 << (n % 31),
+            // Several (the first and the last among them now and then).
+            2 => {
+                for _ in 0..1 + n % 7 {
+                    saved[(rng.next_f64() * N as f64) as usize] ^= 1 << (n % 29);
+                }
+                if n % 3 == 0 {
+                    saved[0] ^= 1;
+                    saved[N - 1] ^= 2;
+                }
+            }
             // A word just outside it changed: the window is still the same.
             _ => {
                 let out = (c0 + N + (rng.next_f64() * (128 - N) as f64) as usize) % 128;
@@ -539,7 +550,8 @@ fn the_reflex_images_window_generations_match_the_host() {
         let args = [GENS, c0 as u32, SAVED, N as u32];
         let (ret, _) = b.call(&mut global, f, &args, 100_000).expect("returns");
         let changed = saved != window;
-        assert_eq!(ret, changed as u32, "ask {n}: first column {c0}");
+        let mask = (0..N).fold(0u32, |m, k| m | ((saved[k] != window[k]) as u32) << k);
+        assert_eq!(ret, mask, "ask {n}: first column {c0}");
         let after: Vec<u32> = (0..N)
             .map(|k| ram_word(&b.ram, SAVED + 4 * k as u32))
             .collect();
@@ -548,6 +560,52 @@ fn the_reflex_images_window_generations_match_the_host() {
         still += !changed as u32;
     }
     assert!(moved > 150 && still > 150, "{moved} moved, {still} not");
+}
+
+/// The image's `__reflex_put_column` (a column of the escape's window read again): each
+/// row's bit set or cleared by the column's marks as the escape's Rust does it, the other
+/// bits left, and the answer the bit when a row's bit changed; any column, marks none,
+/// some, all, and the rows' bits already as marked.
+#[test]
+fn the_reflex_images_column_puts_match_the_host() {
+    let img = Image::load(&images_dir().join("reflex.elf")).unwrap();
+    let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+    let (mut b, f) = probe_board(&img, &mut global, "__reflex_put_column", &[]);
+    const N: usize = reflex::escape::WIN;
+    let mut rng = Rng::new(29);
+    let word = |rng: &mut Rng| (rng.next_f64() * 4_294_967_296.0) as u32;
+    let (mut changed, mut same) = (0, 0);
+    for n in 0..400 {
+        let mut rows = [0u32; N];
+        for r in rows.iter_mut() {
+            *r = word(&mut rng);
+        }
+        let k = n % 32;
+        let bit = 1u32 << k;
+        let marked = match n % 5 {
+            0 => 0,
+            1 => u32::MAX,
+            // The rows already as marked: nothing changes.
+            2 => (0..N).fold(0, |m, r| m | (((rows[r] & bit) == 0) as u32) << r),
+            _ => word(&mut rng),
+        };
+        for (r, &w) in rows.iter().enumerate() {
+            put_word(&mut b.ram, BUF + 4 * r as u32, w);
+        }
+        let (ret, _) = b
+            .call(&mut global, f, &[BUF, marked, bit], 100_000)
+            .expect("returns");
+        let mut want = rows;
+        let want_ret = reflex::escape::put_column(&mut want, marked, bit);
+        let got: Vec<u32> = (0..N)
+            .map(|r| ram_word(&b.ram, BUF + 4 * r as u32))
+            .collect();
+        assert_eq!(got, want.to_vec(), "ask {n}: column {k}, marks {marked:#x}");
+        assert_eq!(ret, want_ret, "ask {n}: column {k}, marks {marked:#x}");
+        changed += (want_ret != 0) as u32;
+        same += (want_ret == 0) as u32;
+    }
+    assert!(changed > 150 && same > 50, "{changed} changed, {same} not");
 }
 
 #[test]

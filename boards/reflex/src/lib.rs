@@ -409,6 +409,10 @@ impl<G: GlobalBus> Map for SensedMap<'_, G> {
         self.map.col_run(i1, i2, n)
     }
     #[inline(always)]
+    fn col_bits(&mut self, i1: u32, i2: u32) -> u32 {
+        self.map.col_bits(i1, i2)
+    }
+    #[inline(always)]
     fn gens_ptr(&mut self) -> Option<*const u32> {
         self.map.gens_ptr()
     }

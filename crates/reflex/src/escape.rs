@@ -69,15 +69,15 @@ pub struct Scratch {
     gens: [u32; WIN],
     /// The map's epoch ([`Map::epoch`]) read just before `gens` were.
     gens_epoch: u32,
+    /// The window columns whose generations moved at their last read, window column `k`
+    /// at bit `k`: those [`replan`] reads again when the ask is the plan's.
+    moved: u32,
     /// The last plan's ask and result, kept while neither the ask nor a column of the
     /// window changes (then the plan is the same: it depends on nothing else).
     memo_ask: Ask,
     memo: Option<Plan>,
     /// `memo_ask` and `memo` hold a plan (-1), on a map with generations.
     memo_valid: i32,
-    /// The window's pixels (`free[0]`) the last plan was made from, while the window is
-    /// read again.
-    was: [u32; WIN],
     /// Pixels whose words the kept plans stood for without a read, since
     /// [`Scratch::take_vouched`].
     vouched: u32,
@@ -108,6 +108,7 @@ impl Scratch {
             step: [0; 2],
             gens: [0; WIN],
             gens_epoch: 0,
+            moved: 0,
             memo_ask: Ask {
                 at_px: [0; 2],
                 toward_px: [0; 2],
@@ -117,7 +118,6 @@ impl Scratch {
             },
             memo: None,
             memo_valid: 0,
-            was: [0; WIN],
             vouched: 0,
         }
     }
@@ -126,6 +126,12 @@ impl Scratch {
     /// every column's generation unchanged) since the last call.
     pub fn take_vouched(&mut self) -> u32 {
         core::mem::take(&mut self.vouched)
+    }
+
+    /// The window's pixels as last read or kept (bit set: free), row `r` at index `r`.
+    #[cfg(test)]
+    pub(crate) fn window(&self) -> &[u32; WIN] {
+        &self.free[0]
     }
 }
 
@@ -195,12 +201,15 @@ pub fn plan_kept<'s, M: Map + ?Sized>(
 fn replan<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask, tests: &mut u32) {
     // Columns of the window were written since the plan (an obstacle redrawn): the plan
     // depends on the ask and the window's pixels alone, so the same pixels read again give
-    // it again (a plan anew floods the window: up to ~180,000 cycles on the 68020).
-    let asked_before = s.memo_valid != 0 && *ask == s.memo_ask;
-    s.was = s.free[0];
-    load(m, s, ask.at_px, tests);
-    if asked_before && same_pixels(&s.was, &s.free[0]) {
-        return;
+    // it again (a plan anew floods the window: up to ~180,000 cycles on the 68020). Only
+    // the columns written are read again (a 1 mm redraw of the disk the arm is in moves
+    // 5-6 of the 32; the whole window, 33 calls of 32 words, took ~17,500 cycles).
+    if s.memo_valid != 0 && *ask == s.memo_ask {
+        if reload(m, s, ask.at_px, s.moved, tests) == 0 {
+            return;
+        }
+    } else {
+        load(m, s, ask.at_px, tests);
     }
     let p = plan_anew(s, ask);
     s.memo_ask = *ask;
@@ -231,13 +240,13 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
     s.gens_epoch = e;
     // The window's first column, in 0..128 (the arm's pixel is unwrapped).
     let c0 = ((ask.at_px[0] - HALF) & 127) as u32;
-    let moved = gens_moved(m, c0, &mut s.gens);
-    masks::zero(moved) & same_ask
+    s.moved = gens_moved(m, c0, &mut s.gens);
+    masks::zero(s.moved) & same_ask
 }
 
-/// Whether a column of the `WIN` from `c0` (wrapping) was written since their generations
-/// were saved in `saved`: zero when none was, else nonzero, and `saved` then holds the
-/// generations now. On the 68020 `__reflex_gens_moved` in the runtime's assembly, a
+/// Which columns of the `WIN` from `c0` (wrapping) were written since their generations
+/// were saved in `saved`: bit `k` for column `c0 + k`, zero when none was, and `saved`
+/// then holds the generations now. On the 68020 `__reflex_gens_moved` in the runtime's assembly, a
 /// `CMPM.L` loop over the generations in global RAM that copies them only when one
 /// differs (the compiled loop, a `column_gen` read a column, spent ~2,600 cycles of an
 /// escape's pass); `the_reflex_images_window_generations_match_the_host` holds it to what
@@ -257,7 +266,7 @@ fn gens_moved<M: Map + ?Sized>(m: &mut M, c0: u32, saved: &mut [u32; WIN]) -> u3
     let mut k = 0;
     while k < WIN {
         let g = m.column_gen((c0 + k as u32) & 127);
-        moved |= g ^ saved[k];
+        moved |= ((g != saved[k]) as u32) << k;
         saved[k] = g;
         k += 1;
     }
@@ -315,17 +324,67 @@ fn load<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, at: [i32; 2], tests: &mut u
     *tests += WORDS;
 }
 
-/// Whether two windows' pixels are the same (an or of differences, no early exit: fewer
-/// branches for the 68k backend, docs/toolchain.md class 1).
+/// Reads again into `free[0]` the columns of the window around `at` whose bit is set in
+/// `cols` (window column `k` at bit `k`), as [`load`] would read them; the others are left
+/// as they are. Nonzero when a pixel changed.
 #[inline(never)]
-fn same_pixels(a: &[u32; WIN], b: &[u32; WIN]) -> bool {
-    let mut d = 0;
-    let mut r = 0;
-    while r < WIN {
-        d |= a[r] ^ b[r];
-        r += 1;
+fn reload<M: Map + ?Sized>(
+    m: &mut M,
+    s: &mut Scratch,
+    at: [i32; 2],
+    cols: u32,
+    tests: &mut u32,
+) -> u32 {
+    let c0 = ((at[0] - HALF) & 127) as u32;
+    let r0 = ((at[1] - HALF) & 127) as u32;
+    let mut left = cols;
+    let mut k = 0;
+    let mut changed = 0;
+    while left != 0 {
+        if left & 1 != 0 {
+            let c = (c0 + k) & 127;
+            // A marked stripe marks the whole column (its pixels need no read).
+            let marked = if m.stripes_or(c, 1) != 0 {
+                u32::MAX
+            } else {
+                m.col_bits(c, r0)
+            };
+            changed |= put_column(&mut s.free[0], marked, 1 << k);
+            *tests += WIN as u32 + 1;
+        }
+        left >>= 1;
+        k += 1;
     }
-    d == 0
+    changed
+}
+
+/// Column `bit` (a single bit) of the window's rows (bit set: free) from `marked` (bit `r`
+/// for row `r`): cleared in row `r` where `marked` has it, set where not. Returns `bit`
+/// when a row's bit changed, else 0. On the 68020 `__reflex_put_column` in the runtime's
+/// assembly, an unrolled `LSR.L` / `SUBX.L` run (the compiled loop spent ~2,800 cycles a
+/// column); `the_reflex_images_column_puts_match_the_host` holds it to this code.
+#[inline(never)]
+pub fn put_column(rows: &mut [u32; WIN], marked: u32, bit: u32) -> u32 {
+    #[cfg(target_arch = "m68k")]
+    {
+        extern "C" {
+            fn __reflex_put_column(rows: *mut u32, marked: u32, bit: u32) -> u32;
+        }
+        // SAFETY: `rows` holds the WIN (32) words the routine reads and writes.
+        unsafe { __reflex_put_column(rows.as_mut_ptr(), marked, bit) }
+    }
+    #[cfg(not(target_arch = "m68k"))]
+    {
+        let mut changed = 0;
+        let mut r = 0;
+        while r < WIN {
+            let new = (rows[r] | bit) ^ (((marked >> r) & 1).wrapping_neg() & bit);
+            changed |= rows[r] ^ new;
+            rows[r] = new;
+            r += 1;
+        }
+        changed
+    }
 }
 
 /// Words a window's load reads: its rows' pixels and its columns' stripes.

@@ -995,8 +995,9 @@ fn escape_op() -> impl Strategy<Value = EscapeOp> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
     /// The escape keeps its last plan while the ask and the window's columns stay; whatever
-    /// was written between the plans, a kept plan is the one fresh bitmaps find, and an ask
-    /// repeated with nothing written reads no word.
+    /// was written between the plans, a kept plan is the one fresh bitmaps find, its window
+    /// (read again only in the columns written) is the one they read, and an ask repeated
+    /// with nothing written reads no word.
     #[test]
     fn a_kept_escape_plan_is_the_one_planned_afresh(
         start in proptest::collection::vec((-20i32..20, 40u32..80), 0..400),
@@ -1017,8 +1018,12 @@ proptest! {
                     let mut m = window::BusMap(&mut g);
                     let (mut t_kept, mut t_fresh, mut t_again) = (0, 0, 0);
                     let p = escape::plan(&mut m, &mut kept, &ask, &mut t_kept);
-                    let fresh = escape::plan(&mut m, &mut escape::Scratch::new(), &ask, &mut t_fresh);
+                    let mut anew = escape::Scratch::new();
+                    let fresh = escape::plan(&mut m, &mut anew, &ask, &mut t_fresh);
                     prop_assert_eq!(p, fresh, "{:?}", op);
+                    // The window as the kept plan holds it (read again in part, or kept) is
+                    // the map's.
+                    prop_assert_eq!(kept.window(), anew.window(), "{:?}", op);
                     let again = escape::plan(&mut m, &mut kept, &ask, &mut t_again);
                     prop_assert_eq!(again, fresh);
                     prop_assert_eq!(t_again, 0, "an ask repeated with nothing written is read again");

@@ -31,8 +31,8 @@ pub trait Map {
     /// The obstacles as sensed, for the evasion ([`crate::evade`]): each slot's `valid`,
     /// and the rest of the valid slots (an invalid slot's other words are read by nobody).
     /// The reflex asks among moving obstacles only, on the passes that read them (the
-    /// tracks' samples, [`crate::evade::TRACK_PASS_US`] apart, and the trapped passes): a
-    /// map handed to one pass builds them on its first call. Built by the board every pass
+    /// trapped passes; the tracks' samples are kept, [`Map::keep_obstacles`]): a map
+    /// handed to one pass builds them on its first call. Built by the board every pass
     /// among moving obstacles, the six views cost the reflex image ~2,700 cycles of every
     /// escape pass, where nothing read them seven passes in eight. The default (a map with
     /// no sensed obstacles: unit tests, scripted passes) has none.
@@ -103,6 +103,20 @@ pub trait Map {
             self.stripe_bits((w0 + 32) & (SIDE - 1)),
             i1 & 31,
         )
+    }
+    /// Bit `k` set when pixel (`i1`, `i2 + k` mod 128) is marked, `k` < 32, any `i2` < 128
+    /// (the stripe word is not read): a column of the escape's window (`crate::escape`),
+    /// read again alone when its generation moved. The default reads pixel by pixel
+    /// through [`Map::col_or`].
+    fn col_bits(&mut self, i1: u32, i2: u32) -> u32 {
+        let mut bits = 0;
+        let mut k = 0;
+        while k < 32 {
+            let w = self.col_or(i1, (i2 + k) & (SIDE - 1), 1);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
     }
     /// How many of rows `i2 .. i2 + n` (`i2 + n <= 128`) of column `i1`, from the first,
     /// are free (its map words zero; the stripe word is not read). The default reads
@@ -221,6 +235,25 @@ impl<G: vme_map::GlobalBus> Map for BusMap<'_, G> {
         }
         let w0 = i1 & !31;
         join(self.stripe_bits(w0), self.stripe_bits(0), i1 & 31)
+    }
+    // Rows `i2 ..` to the map's last, then from row 0: a word of the column every 512
+    // bytes, one call a run.
+    fn col_bits(&mut self, i1: u32, i2: u32) -> u32 {
+        use vme_map::layout::{cspace_counter, CSPACE_SIDE};
+        const STRIDE: u32 = 4 * CSPACE_SIDE;
+        let n0 = SIDE - i2;
+        if n0 >= 32 {
+            return self
+                .0
+                .nonzero_bits_strided(cspace_counter(i1, i2, 0), 32, STRIDE);
+        }
+        let a = self
+            .0
+            .nonzero_bits_strided(cspace_counter(i1, i2, 0), n0, STRIDE);
+        let b = self
+            .0
+            .nonzero_bits_strided(cspace_counter(i1, 0, 0), 32 - n0, STRIDE);
+        a | (b << n0)
     }
 }
 

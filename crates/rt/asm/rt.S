@@ -285,11 +285,12 @@ __vme_zero_run:
 9:  rts
 
 /* ---- the escape's window generations (crates/reflex, escape::same_window) ----
- * u32 __reflex_gens_moved(const u32 *gens, u32 c0, u32 *saved, u32 n): 0 when the
- * generation words gens[(c0 + k) mod 128], k = 0 .. n (0 < n <= 128, c0 < 128), are
- * saved[k], else 1 with every one of them copied into saved: whether a column of the
- * window was written since the words were saved. Compared with CMPM.L in at most two runs
- * that do not wrap (the usual answer, none written, reads each pair once). */
+ * u32 __reflex_gens_moved(const u32 *gens, u32 c0, u32 *saved, u32 n): which of the
+ * generation words gens[(c0 + k) mod 128], k = 0 .. n (0 < n <= 32, c0 < 128), are not
+ * saved[k]: bit k for each, 0 when none (then nothing is written), every one copied into
+ * saved otherwise: the window's columns written since the words were saved. Compared with
+ * CMPM.L in at most two runs that do not wrap (the usual answer, none written, reads each
+ * pair once); when one differs, each pair again from the last down, its bit shifted in. */
     .section .text.__reflex_gens_moved, "ax"
     .globl __reflex_gens_moved
 __reflex_gens_moved:
@@ -319,17 +320,53 @@ __reflex_gens_moved:
 9:  moveq   #0, %d0
     movem.l (%sp)+, %d2-%d3/%a2
     rts
-8:  movea.l 24(%sp), %a1            /* one differs: every word saved again */
+8:  move.l  28(%sp), %d2            /* one differs: from the last pair down */
+    movea.l 24(%sp), %a1
+    lea     (%a1,%d2.l*4), %a1      /* past the last saved word */
     move.l  20(%sp), %d1
-    move.l  28(%sp), %d2
+    add.l   %d2, %d1                /* the column after the last, unwrapped */
     subq.l  #1, %d2
+    moveq   #0, %d0
     moveq   #127, %d3
-4:  and.l   %d3, %d1
-    move.l  (%a2,%d1.l*4), (%a1)+
-    addq.l  #1, %d1
-    dbra    %d2, 4b
-    moveq   #1, %d0
+4:  subq.l  #1, %d1
+    and.l   %d3, %d1
+    movea.l (%a2,%d1.l*4), %a0      /* the generation now */
+    add.l   %d0, %d0                /* the bits so far up one */
+    cmpa.l  -(%a1), %a0
+    beq.s   5f
+    addq.l  #1, %d0                 /* this column moved */
+    move.l  %a0, (%a1)              /* saved anew */
+5:  dbra    %d2, 4b
     movem.l (%sp)+, %d2-%d3/%a2
+    rts
+
+/* ---- a column of the escape's window read again (crates/reflex, escape::put_column) ----
+ * u32 __reflex_put_column(u32 *rows, u32 marked, u32 bit): for r = 0 .. 32, the bit `bit`
+ * of rows[r] cleared where bit r of marked is set, set where it is not; returns `bit` when
+ * a row's bit changed, else 0. LSR.L shifts bit r out into X, SUBX.L makes it a mask, and
+ * the bit, set, is flipped off by the mask; old ^ new is or-ed into the answer. */
+    .section .text.__reflex_put_column, "ax"
+    .globl __reflex_put_column
+__reflex_put_column:
+    movem.l %d2-%d5, -(%sp)         /* 16 bytes: arguments from 20(%sp) */
+    movea.l 20(%sp), %a0
+    move.l  24(%sp), %d0
+    move.l  28(%sp), %d1
+    moveq   #0, %d5
+    .rept 32
+    lsr.l   #1, %d0
+    subx.l  %d2, %d2
+    and.l   %d1, %d2
+    move.l  (%a0), %d3
+    move.l  %d3, %d4
+    or.l    %d1, %d4
+    eor.l   %d2, %d4
+    eor.l   %d4, %d3
+    or.l    %d3, %d5
+    move.l  %d4, (%a0)+
+    .endr
+    move.l  %d5, %d0
+    movem.l (%sp)+, %d2-%d5
     rts
 
 /* ---- the reflex's known columns (crates/reflex, window::Known) ----
@@ -477,6 +514,28 @@ __vme_nonzero_bits:
     neg.l   %d1
     addx.l  %d0, %d0
     .endr
+    rts
+
+/* ---- a run of a column's words as bits (GlobalBus::nonzero_bits_strided) ----
+ * u32 __vme_nonzero_bits_strided(const u32 *last, u32 n, u32 stride): bit k set when the
+ * k-th of the n words (0 < n <= 32) stride bytes apart ending at last is nonzero. From the
+ * last word up, as __vme_nonzero_bits: NEG.L sets X for a nonzero word, ADDX.L shifts it
+ * in, so the first word's bit ends at bit 0. */
+    .section .text.__vme_nonzero_bits_strided, "ax"
+    .globl __vme_nonzero_bits_strided
+__vme_nonzero_bits_strided:
+    move.l  %d2, -(%sp)         /* arguments now at 8, 12, 16 */
+    movea.l 8(%sp), %a0
+    move.l  12(%sp), %d1
+    movea.l 16(%sp), %a1
+    moveq   #0, %d0
+    bra.s   2f
+1:  move.l  (%a0), %d2
+    suba.l  %a1, %a0
+    neg.l   %d2
+    addx.l  %d0, %d0
+2:  dbra    %d1, 1b
+    move.l  (%sp)+, %d2
     rts
 
 /* ---- unsigned remainder (crates/fx::rem_u32) ----

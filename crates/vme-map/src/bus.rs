@@ -167,6 +167,19 @@ pub trait GlobalBus {
         }
         bits
     }
+    /// Bit `k` set when the `k`-th of the `n` aligned words `stride` bytes apart from `off`
+    /// is nonzero (`n` <= 32): a run of a C-space map column as a word of bits (on the
+    /// 68020 a `NEG.L` / `ADDX.L` loop in the runtime's assembly).
+    fn nonzero_bits_strided(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        let mut bits = 0;
+        let mut k = 0;
+        while k < n {
+            let w = self.read_u32(off + k * stride);
+            bits |= ((w | w.wrapping_neg()) >> 31) << k;
+            k += 1;
+        }
+        bits
+    }
     /// The address of the aligned word at `off` where global RAM is memory-mapped (the
     /// 68020's VME window), for assembly routines that walk a table in place (the sensing
     /// board's calibration lookup); `None` on buses that are not (the host's models), whose
@@ -206,6 +219,9 @@ impl<T: GlobalBus + ?Sized> GlobalBus for &mut T {
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         (**self).nonzero_bits(off)
+    }
+    fn nonzero_bits_strided(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        (**self).nonzero_bits_strided(off, n, stride)
     }
     fn zero_run(&mut self, off: u32, n: u32, stride: u32) -> u32 {
         (**self).zero_run(off, n, stride)
@@ -286,6 +302,14 @@ impl GlobalBus for ArrayBus<'_> {
         let mut bits = 0u32;
         for (k, w) in self.mem[o..o + 128].chunks_exact(4).enumerate() {
             bits |= ((w != [0, 0, 0, 0]) as u32) << k;
+        }
+        bits
+    }
+    fn nonzero_bits_strided(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        let (o, st) = (off as usize, stride as usize);
+        let mut bits = 0u32;
+        for k in 0..n as usize {
+            bits |= ((self.mem[o + k * st..o + k * st + 4] != [0, 0, 0, 0]) as u32) << k;
         }
         bits
     }
@@ -428,6 +452,20 @@ impl GlobalBus for MmioGlobal {
         unsafe { __vme_nonzero_bits(Self::ptr::<u32>(off)) }
     }
     #[inline(always)]
+    fn nonzero_bits_strided(&mut self, off: u32, n: u32, stride: u32) -> u32 {
+        extern "C" {
+            // A `NEG.L` / `ADDX.L` loop in the runtime's assembly (crates/rt/asm/rt.S), from
+            // the last word down.
+            fn __vme_nonzero_bits_strided(last: *const u32, n: u32, stride: u32) -> u32;
+        }
+        if n == 0 {
+            return 0;
+        }
+        // SAFETY: `n` aligned words of mapped global RAM `stride` bytes apart from `off`,
+        // only read.
+        unsafe { __vme_nonzero_bits_strided(Self::ptr::<u32>(off + (n - 1) * stride), n, stride) }
+    }
+    #[inline(always)]
     fn count_run(&mut self, col_off: u32, row: u32, rows: u32, mask: u32, down: bool) -> u32 {
         extern "C" {
             // An `ADD.L` / `SUB.L` loop in the runtime's assembly (crates/rt/asm/rt.S).
@@ -551,6 +589,37 @@ mod tests {
             assert_eq!(ArrayBus::new(&mut mem).nonzero_bits(off), want);
             assert_eq!(Plain(ArrayBus::new(&mut copy)).nonzero_bits(off), want);
         }
+    }
+
+    #[test]
+    fn nonzero_bits_strided_marks_the_nonzero_words() {
+        let mut mem = [0u8; 0x4000];
+        for (i, b) in mem.iter_mut().enumerate() {
+            *b = if i % 37 == 0 { 1 + (i % 251) as u8 } else { 0 };
+        }
+        let mut copy = mem;
+        for (off, n, stride) in [
+            (0, 32, 512),
+            (128, 7, 512),
+            (1000, 32, 4),
+            (3964, 1, 8),
+            (0, 0, 4),
+        ] {
+            let want = (0..n).fold(0, |a, k| {
+                a | (((ArrayBus::new(&mut mem).read_u32(off + stride * k) != 0) as u32) << k)
+            });
+            assert_eq!(
+                ArrayBus::new(&mut mem).nonzero_bits_strided(off, n, stride),
+                want
+            );
+            assert_eq!(
+                Plain(ArrayBus::new(&mut copy)).nonzero_bits_strided(off, n, stride),
+                want
+            );
+        }
+        // Not all zero, not all marked.
+        let w = ArrayBus::new(&mut mem).nonzero_bits_strided(0, 32, 512);
+        assert!(w != 0 && w != u32::MAX, "{w:#x}");
     }
 
     #[test]
