@@ -159,6 +159,16 @@ fn cas_swaps_only_when_the_word_matches() {
     assert_eq!(u32::from_be_bytes(g[0x800..0x804].try_into().unwrap()), 9);
 }
 
+/// A map word as the readers' tests draw them: zero a quarter of the time, one bit a
+/// quarter, else a sparse random word.
+fn sparse_word(rng: &mut sim_host::sim::Rng) -> u32 {
+    match rng.next_u64() % 4 {
+        0 => 0,
+        1 => 1 << (rng.next_u64() % 32),
+        _ => rng.next_u64() as u32 & (rng.next_u64() as u32),
+    }
+}
+
 /// The planner's map reader (`__vme_nonzero_bits`, the runtime's assembly) against the
 /// host's bus, on rows of random words with runs of zeros.
 #[test]
@@ -171,11 +181,7 @@ fn nonzero_bits_matches_the_host_bus() {
     for case in 0..200u32 {
         let off = 0x1000 + 128 * case;
         for k in 0..32u32 {
-            let v = match rng.next_u64() % 4 {
-                0 => 0,
-                1 => 1 << (rng.next_u64() % 32),
-                _ => rng.next_u64() as u32 & (rng.next_u64() as u32),
-            };
+            let v = sparse_word(&mut rng);
             ArrayBus::new(&mut g).write_u32(off + 4 * k, v);
         }
         let want = ArrayBus::new(&mut g).nonzero_bits(off);
@@ -202,11 +208,7 @@ fn nonzero_bits_strided_matches_the_host_bus() {
         let n = 1 + (rng.next_u64() % 32) as u32;
         let off = 0x1_0000 + 4 * (rng.next_u64() % 128) as u32;
         for k in 0..n {
-            let v = match rng.next_u64() % 4 {
-                0 => 0,
-                1 => 1 << (rng.next_u64() % 32),
-                _ => rng.next_u64() as u32 & (rng.next_u64() as u32),
-            };
+            let v = sparse_word(&mut rng);
             ArrayBus::new(&mut g).write_u32(off + stride * k, v);
         }
         let want = ArrayBus::new(&mut g).nonzero_bits_strided(off, n, stride);
