@@ -246,9 +246,9 @@ fn same_window<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, ask: &Ask) -> i32 {
 
 /// Which columns of the `WIN` from `c0` (wrapping) were written since their generations
 /// were saved in `saved`: bit `k` for column `c0 + k`, zero when none was, and `saved`
-/// then holds the generations now. On the 68020 `__reflex_gens_moved` in the runtime's assembly, a
-/// `CMPM.L` loop over the generations in global RAM that copies them only when one
-/// differs (the compiled loop, a `column_gen` read a column, spent ~2,600 cycles of an
+/// then holds the generations now. On the 68020 `__reflex_gens_moved` in the runtime's
+/// assembly, a `CMPM.L` loop over the generations in global RAM that copies them only when
+/// one differs (the compiled loop, a `column_gen` read a column, spent ~2,600 cycles of an
 /// escape's pass); `the_reflex_images_window_generations_match_the_host` holds it to what
 /// this code answers.
 #[inline(never)]

@@ -554,7 +554,7 @@ pub struct Tracks {
     /// The first obstacle whose sample, kept by the map on the last sampling pass
     /// ([`Map::keep_obstacles`]), is not yet in its track ([`OBSTACLES`]: none).
     pending: u32,
-    /// The sample being taken.
+    /// The sample being taken, made by the map in place ([`Map::kept_view`]).
     sample: ObstacleView,
 }
 
@@ -607,8 +607,8 @@ impl Tracks {
     }
 
     /// Whether [`Tracks::update`] at `now_us` takes a sample ([`TRACK_PASS_US`] since the
-    /// last that did): only then does it read the obstacles, so only then need they be
-    /// built ([`crate::Obstacles`]).
+    /// last that did): only then does the map keep the obstacles ([`Map::keep_obstacles`]);
+    /// on the other passes a kept sample is taken ([`Tracks::settle_one`]).
     pub fn due(&self, now_us: u32) -> bool {
         self.early(now_us) == 0
     }
