@@ -156,16 +156,9 @@ pub trait GlobalBus {
     }
     /// Bit `k` set when the `k`-th of the 32 consecutive aligned words from `off` is
     /// nonzero: 32 pixels of a C-space map row as one word of the planner's bitmap (on the
-    /// 68020 a `TST.L (An)+` loop in the runtime's assembly).
+    /// 68020 an unrolled `NEG.L` / `ADDX.L` run in the runtime's assembly).
     fn nonzero_bits(&mut self, off: u32) -> u32 {
-        let mut bits = 0;
-        let mut k = 0;
-        while k < 32 {
-            let w = self.read_u32(off + 4 * k);
-            bits |= ((w | w.wrapping_neg()) >> 31) << k;
-            k += 1;
-        }
-        bits
+        self.nonzero_bits_strided(off, 32, 4)
     }
     /// Bit `k` set when the `k`-th of the `n` aligned words `stride` bytes apart from `off`
     /// is nonzero (`n` <= 32): a run of a C-space map column as a word of bits (on the
@@ -296,14 +289,6 @@ impl GlobalBus for ArrayBus<'_> {
             acc |= u32::from_be_bytes([w[0], w[1], w[2], w[3]]);
         }
         acc
-    }
-    fn nonzero_bits(&mut self, off: u32) -> u32 {
-        let o = off as usize;
-        let mut bits = 0u32;
-        for (k, w) in self.mem[o..o + 128].chunks_exact(4).enumerate() {
-            bits |= ((w != [0, 0, 0, 0]) as u32) << k;
-        }
-        bits
     }
     fn nonzero_bits_strided(&mut self, off: u32, n: u32, stride: u32) -> u32 {
         let (o, st) = (off as usize, stride as usize);
@@ -445,7 +430,7 @@ impl GlobalBus for MmioGlobal {
     }
     fn nonzero_bits(&mut self, off: u32) -> u32 {
         extern "C" {
-            // A `TST.L (An)+` / `BSET` loop in the runtime's assembly (crates/rt/asm/rt.S).
+            // An unrolled `NEG.L` / `ADDX.L` run in the runtime's assembly (crates/rt/asm/rt.S).
             fn __vme_nonzero_bits(addr: *const u32) -> u32;
         }
         // SAFETY: 32 aligned words of mapped global RAM, only read.
