@@ -75,14 +75,7 @@ pub trait Map {
     /// one word of a row of the planner's bitmap (`crates/planner`). The default reads
     /// pixel by pixel through [`Map::row_or`].
     fn row_bits(&mut self, i2: u32, i1: u32) -> u32 {
-        let mut bits = 0;
-        let mut k = 0;
-        while k < 32 {
-            let w = self.row_or(i2, i1 + k, 1);
-            bits |= ((w | w.wrapping_neg()) >> 31) << k;
-            k += 1;
-        }
-        bits
+        bits_of(|k| self.row_or(i2, i1 + k, 1))
     }
     /// Bit `k` set when pixel (`i1 + k` mod 128, `i2`) is marked, `k` < 32, any `i1` < 128:
     /// a row of the escape's window (`crate::escape`). The default joins two aligned
@@ -109,14 +102,7 @@ pub trait Map {
     /// read again alone when its generation moved. The default reads pixel by pixel
     /// through [`Map::col_or`].
     fn col_bits(&mut self, i1: u32, i2: u32) -> u32 {
-        let mut bits = 0;
-        let mut k = 0;
-        while k < 32 {
-            let w = self.col_or(i1, (i2 + k) & (SIDE - 1), 1);
-            bits |= ((w | w.wrapping_neg()) >> 31) << k;
-            k += 1;
-        }
-        bits
+        bits_of(|k| self.col_or(i1, (i2 + k) & (SIDE - 1), 1))
     }
     /// How many of rows `i2 .. i2 + n` (`i2 + n <= 128`) of column `i1`, from the first,
     /// are free (its map words zero; the stripe word is not read). The default reads
@@ -149,15 +135,21 @@ pub trait Map {
     }
     /// Bit `k` set when stripe `i1 + k` is marked, `k` < 32 (`i1` a multiple of 32).
     fn stripe_bits(&mut self, i1: u32) -> u32 {
-        let mut bits = 0;
-        let mut k = 0;
-        while k < 32 {
-            let w = self.stripes_or(i1 + k, 1);
-            bits |= ((w | w.wrapping_neg()) >> 31) << k;
-            k += 1;
-        }
-        bits
+        bits_of(|k| self.stripes_or(i1 + k, 1))
     }
+}
+
+/// Bit `k` set when `word(k)` is nonzero, `k` < 32: [`Map`]'s pixel-by-pixel defaults as a
+/// word of bits.
+fn bits_of(mut word: impl FnMut(u32) -> u32) -> u32 {
+    let mut bits = 0;
+    let mut k = 0;
+    while k < 32 {
+        let w = word(k);
+        bits |= ((w | w.wrapping_neg()) >> 31) << k;
+        k += 1;
+    }
+    bits
 }
 
 /// The C-space map in global RAM (`vme_map::layout`), read a word per pixel: what the
