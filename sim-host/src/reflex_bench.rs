@@ -278,7 +278,7 @@ fn image_case(
                         // A pass ended (its heartbeat written): the longest so far keeps
                         // its profile (the first, begun before the timing, is not whole).
                         if periods > 0 && b.beats.max_cycles != max {
-                            worst_top = shortest_names(pass, top, 1.0);
+                            worst_top = costliest(pass, top, 1.0);
                         }
                         pass.clear();
                     }
@@ -339,15 +339,13 @@ fn image_case(
         over_1ms: beats.over_1ms,
         tests_per_pass: tests_sum / samples.max(1) as f64,
         known_per_pass: known_sum / samples.max(1) as f64,
-        top: per.map_or_else(Vec::new, |(per, _)| {
-            shortest_names(&per, top, passes as f64)
-        }),
+        top: per.map_or_else(Vec::new, |(per, _)| costliest(&per, top, passes as f64)),
         worst_top,
     })
 }
 
 /// `f`'s `top` costliest functions with short names, cycles and calls divided by `passes`.
-fn shortest_names(f: &FunctionCycles, top: usize, passes: f64) -> Vec<(String, f64, f64)> {
+fn costliest(f: &FunctionCycles, top: usize, passes: f64) -> Vec<(String, f64, f64)> {
     f.top_calls()
         .into_iter()
         .take(top)
