@@ -449,6 +449,16 @@ impl FunctionCycles {
         self.name(self.slot(pc))
     }
 
+    /// Adds `other`'s charges (to the same image's functions) to these.
+    pub fn add(&mut self, other: &FunctionCycles) {
+        for (a, b) in self.cycles.iter_mut().zip(&other.cycles) {
+            *a += b;
+        }
+        for (a, b) in self.entries.iter_mut().zip(&other.entries) {
+            *a += b;
+        }
+    }
+
     /// Forgets every charge.
     pub fn clear(&mut self) {
         self.cycles.iter_mut().for_each(|c| *c = 0);

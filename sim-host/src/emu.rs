@@ -16,6 +16,7 @@
 //! Traps the core surfaces instead of taking (illegal instruction, A-line, F-line, TRAP,
 //! BKPT) are taken as the hardware would, through the image's vector table.
 
+use crate::boot::FunctionCycles;
 use crate::image::{Image, LOCAL_RAM_SIZE};
 use m68k::core::memory::{BusFault, BusFaultKind};
 use m68k::{AddressBus, CpuCore, CpuType, CycleBatchExit};
@@ -213,6 +214,60 @@ impl ICache {
     }
 }
 
+/// Where an emulated board's long main-loop passes go (`sim-host run --long-passes`): every
+/// instruction charged to its function, a pass's charges kept when the pass (heartbeat to
+/// heartbeat) took longer than `over_cycles`.
+pub struct LongPasses {
+    /// A pass is long above this many cycles.
+    pub over_cycles: u64,
+    /// The pass under way.
+    pass: FunctionCycles,
+    /// The long passes' charges, summed.
+    pub long: FunctionCycles,
+    /// Long passes seen.
+    pub passes: u64,
+    /// The longest pass's charges, and its cycles.
+    pub longest: FunctionCycles,
+    /// The longest pass's cycles (0 before one ends).
+    pub longest_cycles: u64,
+    /// Where the next instruction starts (the PC after the last one).
+    next_pc: u32,
+}
+
+impl LongPasses {
+    /// Nothing charged yet, to `image`'s functions.
+    pub fn new(image: &Image, over_cycles: u64) -> Self {
+        Self {
+            over_cycles,
+            pass: FunctionCycles::new(image),
+            long: FunctionCycles::new(image),
+            passes: 0,
+            longest: FunctionCycles::new(image),
+            longest_cycles: 0,
+            next_pc: 0,
+        }
+    }
+
+    /// Charges the instruction that just took `c` cycles and left the PC at `pc`; `beat`
+    /// is the period it ended, when it wrote the heartbeat.
+    fn charge(&mut self, pc: u32, c: u64, beat: Option<u64>) {
+        self.pass.charge(self.next_pc, c);
+        self.next_pc = pc;
+        if let Some(period) = beat {
+            if period > self.over_cycles {
+                self.long.add(&self.pass);
+                self.passes += 1;
+            }
+            if period > self.longest_cycles {
+                self.longest.clear();
+                self.longest.add(&self.pass);
+                self.longest_cycles = period;
+            }
+            self.pass.clear();
+        }
+    }
+}
+
 /// Main-loop pass timing of an emulated board, from the system-clock cycles at which it
 /// wrote its heartbeat: the loop period as the real board would run it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -230,12 +285,17 @@ pub struct LoopStats {
     /// Periods longer than a millisecond at [`CPU_HZ`] (the reflex's 1 kHz deadline
     /// missed).
     pub over_1ms: u64,
+    /// The period the last heartbeat ended (0 for the first heartbeat, which ends none),
+    /// until taken (by [`LongPasses`]).
+    pub ended: Option<u64>,
 }
 
 impl LoopStats {
     fn beat(&mut self, now: u64) {
+        self.ended = Some(0);
         if let Some(last) = self.last_beat {
             let p = now - last;
+            self.ended = Some(p);
             if self.periods == 0 {
                 self.min_cycles = p;
             }
@@ -444,6 +504,8 @@ pub struct EmuBoard {
     /// The lowest stack pointer seen after an instruction since reset (the stack's
     /// high-water mark; local RAM is left as loaded, so nothing the firmware reads changes).
     pub lowest_sp: u32,
+    /// Where the long main-loop passes go, when asked for ([`LongPasses`]).
+    pub long_passes: Option<Box<LongPasses>>,
 }
 
 /// Why [`EmuBoard::run_until`] returned.
@@ -480,6 +542,7 @@ impl EmuBoard {
             icache: ICache::default(),
             stack_top: image.symbol("_stack_top"),
             lowest_sp: u32::MAX,
+            long_passes: None,
         };
         let mut bus = BoardBus {
             ram: &mut b.ram,
@@ -531,10 +594,17 @@ impl EmuBoard {
                 icache: &mut self.icache,
             };
             let sp = &mut self.lowest_sp;
+            let mut long = self.long_passes.as_deref_mut();
+            if let Some(l) = long.as_deref_mut() {
+                l.next_pc = self.cpu.pc;
+            }
             let r = self
                 .cpu
                 .run_for_cycles_with_hook(&mut bus, left, |cpu, bus, c| {
                     bus.now += c as u64;
+                    if let Some(l) = long.as_deref_mut() {
+                        l.charge(cpu.pc, c as u64, bus.beats.ended.take());
+                    }
                     // A MOVEC to CACR: this entry point leaves the cache control to the
                     // host, which applies it before the next instruction's fetches.
                     if cpu.cacr != bus.icache.cacr || cpu.cacr_pending_ops != 0 {
@@ -646,6 +716,77 @@ fn take_surfaced(cpu: &mut CpuCore, bus: &mut BoardBus, exit: CycleBatchExit) ->
         CycleBatchExit::IllegalInstruction { .. } => cpu.take_illegal_exception(bus),
     };
     (c.max(0) as u64, false)
+}
+
+#[cfg(test)]
+mod long_pass_tests {
+    use super::*;
+    use crate::image::{Image, Segment};
+
+    /// A main loop at 0x400 whose passes alternate short (`quick`: 4 DBRA turns, then the
+    /// heartbeat) and long (`slow`: 128 turns, then the heartbeat).
+    fn alternating() -> Image {
+        let mut code = vec![0u8; 0x400];
+        code[0..4].copy_from_slice(&0x8000u32.to_be_bytes());
+        code[4..8].copy_from_slice(&0x400u32.to_be_bytes());
+        let beat = beat_addr(BoardId::Reflex);
+        let (hi, lo) = ((beat >> 16) as u16, beat as u16);
+        let words: [u16; 15] = [
+            0x7203, // 0x400 quick: moveq #3, d1
+            0x51C9, // dbra d1, *
+            0xFFFE, 0x23C0, // move.l d0, (beat).l
+            hi, lo, 0x727F, // 0x40c slow: moveq #127, d1
+            0x51C9, // dbra d1, *
+            0xFFFE, 0x23C0, // move.l d0, (beat).l
+            hi, lo, 0x60EC, // bra.s quick (0x418 + 2 - 0x14)
+            0x4E71, // nop
+            0x4E71,
+        ];
+        for w in words {
+            code.extend_from_slice(&w.to_be_bytes());
+        }
+        Image {
+            path: "long-pass-test".into(),
+            segments: vec![Segment {
+                addr: 0,
+                data: code,
+            }],
+            sizes: None,
+            symbols: vec![("quick".into(), 0x400), ("slow".into(), 0x40c)],
+        }
+    }
+
+    /// Only the passes above the threshold are summed, each instruction charged to the
+    /// function it lies in; the longest pass is kept whole.
+    #[test]
+    fn only_the_long_passes_are_charged() {
+        let image = alternating();
+        let mut global = vec![0u8; GLOBAL_RAM_SIZE as usize];
+        let mut b = EmuBoard::new(BoardId::Reflex, &image, Box::new(NullDevice), &mut global);
+        b.long_passes = Some(Box::new(LongPasses::new(&image, 300)));
+        b.run(&mut global, 40_000);
+        let l = b.long_passes.as_deref().expect("kept");
+        let periods = b.beats.periods;
+        assert!(periods > 40, "{periods} passes");
+        // Every other period is the slow one.
+        assert!(
+            l.passes.abs_diff(periods / 2) <= 1,
+            "{} long of {periods}",
+            l.passes
+        );
+        let top = l.long.top();
+        assert_eq!(
+            top.len(),
+            1,
+            "only `slow`'s code runs in a long pass: {top:?}"
+        );
+        assert_eq!(top[0].0, "slow");
+        // 128 DBRA turns at 6-10 cycles, and what runs around them.
+        let per = top[0].1 / l.passes;
+        assert!((700..1_500).contains(&per), "{per} cycles a long pass");
+        assert_eq!(l.longest.top()[0].1, l.longest_cycles);
+        assert!(l.longest_cycles >= per && l.longest_cycles < per + 50);
+    }
 }
 
 #[cfg(test)]

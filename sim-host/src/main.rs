@@ -52,6 +52,11 @@ struct RunArgs {
     /// wait for GDB before the run starts (e.g. `reflex:1234`; port 0 picks a free one).
     #[arg(long)]
     gdb: Option<String>,
+    /// Image mode: where this board's main-loop passes longer than its budget (1 ms for
+    /// the reflex; `budget us` in the board table) spend their cycles, every instruction
+    /// charged to its function; printed after the table and kept in summary.json.
+    #[arg(long)]
+    long_passes: Option<String>,
     /// Run directory to write (default out/run, or out/demo for `demo`).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -878,6 +883,7 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
         images,
         image_boards,
         gdb,
+        long_passes,
         out,
         quiet,
         trace_every_us,
@@ -899,10 +905,20 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    if mode == Mode::Native && (images.is_some() || gdb.is_some() || !image_boards.is_empty()) {
-        eprintln!("sim-host: --images, --image-boards and --gdb need --mode image");
+    if mode == Mode::Native
+        && (images.is_some() || gdb.is_some() || !image_boards.is_empty() || long_passes.is_some())
+    {
+        eprintln!("sim-host: --images, --image-boards, --gdb and --long-passes need --mode image");
         return ExitCode::from(2);
     }
+    let long_passes = match long_passes.as_deref().map(|b| (b, parse_board(b))) {
+        None => None,
+        Some((_, Some(id))) => Some(id),
+        Some((b, None)) => {
+            eprintln!("sim-host: --long-passes: no board {b} ({BOARD_NAMES})");
+            return ExitCode::from(2);
+        }
+    };
     let mut which = Vec::new();
     for b in &image_boards {
         match parse_board(b) {
@@ -920,6 +936,7 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
         image_boards: which,
         gdb,
         monitor,
+        long_passes,
     };
     match run_to_dir(sc, &out, &opts) {
         Ok(s) => {
@@ -949,6 +966,29 @@ fn run_cmd(sc: &Scenario, a: RunArgs, default_out: &str) -> ExitCode {
                         b.stack_bytes.map_or("-".into(), |x| x.to_string()),
                         b.state
                     );
+                }
+                if let Some(b) = s.boards.iter().find(|b| b.board == BoardId::Reflex.name()) {
+                    if let (Some(n), Some(over), Some(max)) =
+                        (b.loop_periods, b.loop_over_1ms, b.loop_max_us)
+                    {
+                        println!(
+                            "reflex passes: {n} timed, {over} over 1 ms ({:.1}%), the longest {max:.0} us",
+                            100.0 * over as f64 / n.max(1) as f64
+                        );
+                    }
+                }
+                if let Some(l) = &s.long_passes {
+                    println!(
+                        "{} passes over {:.0} us: {} of {}; where they go (cycles and calls a long pass):",
+                        l.board, l.over_us, l.passes, l.periods
+                    );
+                    for (name, cycles, calls) in &l.functions {
+                        println!("  {cycles:>9.0} {calls:>7.1}  {name}");
+                    }
+                    println!("  the longest ({:.0} us):", l.longest_us);
+                    for (name, cycles, calls) in &l.longest_functions {
+                        println!("  {cycles:>9.0} {calls:>7.0}  {name}");
+                    }
                 }
                 if let Some(p) = &s.servo_busy {
                     println!(

@@ -36,6 +36,33 @@ pub struct RunOptions {
     /// Serve the live monitor on this TCP port of 127.0.0.1 (0: any free port) and pace the
     /// run to real time.
     pub monitor: Option<u16>,
+    /// Image mode: profile this board's main-loop passes longer than its budget
+    /// ([`LongPassesSummary`]).
+    pub long_passes: Option<BoardId>,
+}
+
+/// Functions listed in [`LongPassesSummary::functions`].
+pub const LONG_PASS_FUNCTIONS: usize = 15;
+
+/// Image mode, asked for with [`RunOptions::long_passes`]: where one board's main-loop
+/// passes longer than its budget spend their cycles.
+#[derive(Serialize, Clone, Debug, PartialEq)]
+pub struct LongPassesSummary {
+    /// The board.
+    pub board: String,
+    /// A pass is long above this (microseconds at 16.7 MHz: the board's budget).
+    pub over_us: f64,
+    /// Main-loop periods measured.
+    pub periods: u64,
+    /// Long ones among them.
+    pub passes: u64,
+    /// The costliest functions over the long passes (demangled, short): cycles in their
+    /// own code and calls, each per long pass.
+    pub functions: Vec<(String, f64, f64)>,
+    /// The longest pass (microseconds at 16.7 MHz).
+    pub longest_us: f64,
+    /// The longest pass's costliest functions: cycles and calls.
+    pub longest_functions: Vec<(String, f64, f64)>,
 }
 
 /// Report and monitor frames are taken this often (simulated seconds).
@@ -64,6 +91,7 @@ impl Default for RunOptions {
             image_boards: Vec::new(),
             gdb: None,
             monitor: None,
+            long_passes: None,
         }
     }
 }
@@ -103,6 +131,11 @@ pub struct BoardSummary {
     pub budget_share: Option<f64>,
     /// Image mode: the stack's high-water mark (bytes).
     pub stack_bytes: Option<u32>,
+    /// Image mode: main-loop periods measured (heartbeat to heartbeat).
+    pub loop_periods: Option<u64>,
+    /// Image mode: of those, the periods longer than 1 ms at 16.7 MHz (the reflex's 1 kHz
+    /// subgoal deadline, issue 8, missed pass by pass).
+    pub loop_over_1ms: Option<u64>,
     /// Main-loop passes run.
     pub polls: u64,
     /// Passes per simulated second.
@@ -149,6 +182,8 @@ pub struct Summary {
     pub boards: Vec<BoardSummary>,
     /// Image mode with the servo as an image: its passes' busy cycles; null otherwise.
     pub servo_busy: Option<ServoBusy>,
+    /// Image mode, when asked for: where one board's long passes went.
+    pub long_passes: Option<LongPassesSummary>,
     /// Per obstacle (in the scenario's order), the simulated milliseconds in which the
     /// sensing board published its position flagged `EXTRAPOLATED`: read beyond the
     /// camera's calibrated square, where it can be up to 139 mm short of the obstacle and
@@ -356,6 +391,31 @@ pub fn power_up(scenario: &Scenario, opts: &RunOptions) -> Result<Sim, String> {
         }
         .map_err(|e| format!("{e} (build the images with `cargo xtask images`)"))?,
     };
+    if let Some(board) = opts.long_passes {
+        let dir = opts
+            .images
+            .as_ref()
+            .ok_or("--long-passes needs image mode (--mode image)")?;
+        let period_s = scenario
+            .config
+            .boards
+            .iter()
+            .find(|(id, _)| *id == board)
+            .map(|(_, p)| *p);
+        let (Some(period_s), true) = (period_s, sim.emu_board(board).is_some()) else {
+            return Err(format!(
+                "--long-passes: board {} does not run as an image in this scenario",
+                board.name()
+            ));
+        };
+        let path = dir.join(format!("{}.elf", crate::boot::image_name(board)));
+        let image = crate::image::Image::load(&path).map_err(|e| format!("--long-passes: {e}"))?;
+        let budget_s = period_s * crate::boot::passes_per_beat(board) as f64;
+        let over = (budget_s * crate::emu::CPU_HZ as f64).round() as u64;
+        if let Some(b) = sim.emu_board(board) {
+            b.long_passes = Some(Box::new(crate::emu::LongPasses::new(&image, over)));
+        }
+    }
     if let Some((board, port)) = opts.gdb {
         if sim.emu_board(board).is_none() {
             return Err(format!("--gdb: no board {} in this scenario", board.name()));
@@ -504,6 +564,8 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64, ex: Extrapolated) 
                 loop_max_us: hi,
                 budget_share: mean.map(|m| m / budget_us),
                 stack_bytes: s.stack_bytes,
+                loop_periods: s.loop_over_1ms.map(|o| o.0),
+                loop_over_1ms: s.loop_over_1ms.map(|o| o.1),
                 polls: s.polls,
                 rate_hz: s.polls as f64 / t,
                 heartbeat: g.read_u32(slot.heartbeat()),
@@ -520,6 +582,32 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64, ex: Extrapolated) 
             mean_cycles: busy as f64 / passes.max(1) as f64,
             max_cycles: p.stats.max(),
             over_3khz: p.over_budget,
+        }
+    });
+    let long_passes = sim.long_passes().map(|(board, periods, l)| {
+        let us = |c: u64| c as f64 * 1e6 / crate::emu::CPU_HZ as f64;
+        let top = |f: &crate::boot::FunctionCycles, per: u64| {
+            f.top_calls()
+                .into_iter()
+                .take(LONG_PASS_FUNCTIONS)
+                .map(|(n, c, e)| {
+                    let per = per.max(1) as f64;
+                    (
+                        crate::boot::demangle_short(&n),
+                        c as f64 / per,
+                        e as f64 / per,
+                    )
+                })
+                .collect()
+        };
+        LongPassesSummary {
+            board: board.name().into(),
+            over_us: us(l.over_cycles),
+            periods,
+            passes: l.passes,
+            functions: top(&l.long, l.passes),
+            longest_us: us(l.longest_cycles),
+            longest_functions: top(&l.longest, 1),
         }
     });
     let c = sim.collisions;
@@ -539,6 +627,7 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64, ex: Extrapolated) 
         goal_reached: goal_err.map(|e| e <= 0.01),
         boards,
         servo_busy,
+        long_passes,
         obstacles_extrapolated_ms: ex.obstacles_ms,
         wand_extrapolated_ms: ex.wand_ms,
     }

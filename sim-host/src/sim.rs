@@ -360,6 +360,9 @@ pub struct BoardStats {
     /// Image mode: (min, mean, max) main-loop period in microseconds at 16.7 MHz, from the
     /// cycles at which the image wrote its heartbeat.
     pub loop_us: Option<(f64, f64, f64)>,
+    /// Image mode: main-loop periods measured, and how many of them were longer than a
+    /// millisecond at 16.7 MHz (for the reflex, its 1 kHz deadline missed).
+    pub loop_over_1ms: Option<(u64, u64)>,
     /// Image mode: the stack's high-water mark (bytes).
     pub stack_bytes: Option<u32>,
 }
@@ -517,6 +520,15 @@ impl Sim {
     /// Whether any board runs as its image.
     pub fn image_mode(&self) -> bool {
         self.slots.iter().any(|s| matches!(s.code, Code::Image(_)))
+    }
+
+    /// The image board whose long passes are profiled (`EmuBoard::long_passes`), with its
+    /// main-loop periods measured and the profile.
+    pub fn long_passes(&self) -> Option<(BoardId, u64, &crate::emu::LongPasses)> {
+        self.slots.iter().find_map(|s| match &s.code {
+            Code::Image(b) => b.long_passes.as_deref().map(|l| (s.id, b.beats.periods, l)),
+            Code::Native(_) => None,
+        })
     }
 
     /// The emulated board `id` (image mode), to step or inspect in tests and the debugger.
@@ -861,6 +873,7 @@ impl Sim {
                     period_s: s.period_s,
                     halted: s.halted,
                     loop_us: None,
+                    loop_over_1ms: None,
                     stack_bytes: None,
                 },
                 Code::Image(b) => BoardStats {
@@ -869,6 +882,7 @@ impl Sim {
                     period_s: s.period_s,
                     halted: s.halted,
                     loop_us: b.beats.period_us(),
+                    loop_over_1ms: Some((b.beats.periods, b.beats.over_1ms)),
                     stack_bytes: b.stack_high_water(),
                 },
             })

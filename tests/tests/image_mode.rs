@@ -366,3 +366,57 @@ fn three_cspace_images_share_the_work_list() {
     let n = marked.iter().filter(|&&m| m).count();
     assert!(n > 50, "{n} pixels marked");
 }
+
+/// `--long-passes`: the reflex's passes over its 1 ms budget profiled by function, without
+/// changing the run; their count is the board table's, the longest its longest period; a
+/// board that does not run as an image is refused.
+#[test]
+fn the_reflexs_long_passes_are_profiled_without_changing_the_run() {
+    let mut sc = scenario("fig_v_10");
+    sc.config.duration_s = 0.6;
+    let plain = RunOptions {
+        trace_every: 1,
+        quiet: true,
+        images: Some(images_dir()),
+        ..Default::default()
+    };
+    let profiled = RunOptions {
+        long_passes: Some(BoardId::Reflex),
+        ..plain.clone()
+    };
+    let a = run_sampled(&sc, &plain).unwrap();
+    let b = run_sampled(&sc, &profiled).unwrap();
+    assert_eq!(a.trace, b.trace, "profiling leaves the run as it was");
+    assert!(a.summary.long_passes.is_none());
+    let l = b.summary.long_passes.expect("asked for");
+    let reflex = b
+        .summary
+        .boards
+        .iter()
+        .find(|x| x.board == "reflex")
+        .unwrap();
+    assert_eq!(l.over_us.round(), 1000.0);
+    assert_eq!(Some(l.periods), reflex.loop_periods);
+    assert_eq!(Some(l.passes), reflex.loop_over_1ms);
+    assert!(l.passes > 0, "fig. V.10's escape has passes over 1 ms");
+    assert!(!l.functions.is_empty() && !l.longest_functions.is_empty());
+    let max_us = reflex.loop_max_us.unwrap();
+    assert!(
+        (l.longest_us - max_us).abs() < 0.01,
+        "{} against {max_us}",
+        l.longest_us
+    );
+    // The longest pass's functions hold its cycles (the listed ones, at most all of them).
+    let listed: f64 = l.longest_functions.iter().map(|f| f.1).sum();
+    let cycles = max_us * sim_host::emu::CPU_HZ as f64 * 1e-6;
+    assert!(
+        listed <= cycles * 1.001 && listed > cycles * 0.5,
+        "{listed} of {cycles}"
+    );
+    let native_reflex = RunOptions {
+        image_boards: vec![BoardId::Servo],
+        ..profiled
+    };
+    let e = run_sampled(&sc, &native_reflex).err().expect("refused");
+    assert!(e.contains("--long-passes"), "{e}");
+}
