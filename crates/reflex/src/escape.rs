@@ -324,9 +324,17 @@ fn load<M: Map + ?Sized>(m: &mut M, s: &mut Scratch, at: [i32; 2], tests: &mut u
     *tests += WORDS;
 }
 
+/// Columns written above which [`reload`] reads the window whole. On the 68020 a column
+/// read and put into the rows costs ~1,900 cycles (`__vme_nonzero_bits_strided`,
+/// `__reflex_put_column`), the whole window ~38,000 when its rows straddle two map words
+/// (66 `__vme_nonzero_bits` calls), about half that when they do not; a redraw of a disk
+/// that spans the window wrote 27 of its columns in `moving_obstacles.toml` as images.
+pub const RELOAD_MAX_COLS: u32 = 20;
+
 /// Reads again into `free[0]` the columns of the window around `at` whose bit is set in
 /// `cols` (window column `k` at bit `k`), as [`load`] would read them; the others are left
-/// as they are. Nonzero when a pixel changed.
+/// as they are (more than [`RELOAD_MAX_COLS`] set: the whole window read again). Nonzero
+/// when a pixel changed.
 #[inline(never)]
 fn reload<M: Map + ?Sized>(
     m: &mut M,
@@ -335,6 +343,17 @@ fn reload<M: Map + ?Sized>(
     cols: u32,
     tests: &mut u32,
 ) -> u32 {
+    if cols.count_ones() > RELOAD_MAX_COLS {
+        let was = s.free[0];
+        load(m, s, at, tests);
+        let mut changed = 0;
+        let mut r = 0;
+        while r < WIN {
+            changed |= was[r] ^ s.free[0][r];
+            r += 1;
+        }
+        return changed;
+    }
     let c0 = ((at[0] - HALF) & 127) as u32;
     let r0 = ((at[1] - HALF) & 127) as u32;
     let mut left = cols;

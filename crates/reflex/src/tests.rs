@@ -953,6 +953,14 @@ enum EscapeOp {
         clear: i32,
         cross: bool,
     },
+    /// A redraw across the window: one pixel in row `i2` of each of `n` columns from
+    /// window column `from` (more than `escape::RELOAD_MAX_COLS`: the window read whole).
+    Band {
+        from: i32,
+        n: i32,
+        i2: u32,
+        set: bool,
+    },
 }
 
 /// The column the kept-escape check centres on: next to the map's seam, so the window
@@ -973,6 +981,8 @@ fn escape_op() -> impl Strategy<Value = EscapeOp> {
                 stripe,
                 set
             }),
+        (-18i32..0, 1i32..34, 44u32..76, any::<bool>())
+            .prop_map(|(from, n, i2, set)| EscapeOp::Band { from, n, i2, set }),
         // Few places and clearances, so that asks repeat (the kept plan's case); the arm's
         // angle unwrapped by a turn either way too (the same pixels).
         (
@@ -1012,6 +1022,11 @@ proptest! {
         for op in &ops {
             match *op {
                 EscapeOp::Write { i1, i2, stripe, set } => gram.write(i1, i2, stripe, set as u32),
+                EscapeOp::Band { from, n, i2, set } => {
+                    for d1 in from..from + n {
+                        gram.write(((ESCAPE_AT + d1) & 127) as u32, i2, false, set as u32);
+                    }
+                }
                 EscapeOp::Plan { at, toward, clear, cross } => {
                     let ask = escape::Ask { at_px: at, toward_px: toward, clear_px: clear, cross, prev_px: prev };
                     let mut g = gram.bus();
