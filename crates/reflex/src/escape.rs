@@ -501,6 +501,55 @@ fn step(s: &mut Scratch, free_only: bool, best: i32) -> u32 {
     let any_pixel = !(free_only as u32).wrapping_neg();
     let lo = max(s.lo - 1, 0);
     let hi = min(s.hi + 1, WIN as i32 - 1);
+    #[cfg(target_arch = "m68k")]
+    let better = {
+        extern "C" {
+            fn __reflex_flood_step(
+                reach: *mut u32,
+                next: *mut u32,
+                free0: *const u32,
+                lvl: *const u32,
+                n: u32,
+                any: u32,
+                grew: *mut u32,
+            ) -> u32;
+        }
+        let l = lo as usize;
+        let mut grew = 0;
+        // SAFETY: rows lo ..= hi lie within the window (0 ..= WIN - 1): the routine reads
+        // `reach` at indices lo ..= hi + 2 (< WIN + 2) and writes lo + 1 ..= hi + 1, writes
+        // `next` at lo + 1 ..= hi + 1 and reads `free[0]` and `free[best + 1]` at lo ..= hi.
+        let better = unsafe {
+            __reflex_flood_step(
+                s.reach.as_mut_ptr().add(l),
+                s.next.as_mut_ptr().add(l + 1),
+                s.free[0].as_ptr().add(l),
+                s.free[(best + 1) as usize].as_ptr().add(l),
+                (hi - lo + 1) as u32,
+                any_pixel,
+                &mut grew,
+            )
+        };
+        s.grew = grew;
+        better
+    };
+    #[cfg(not(target_arch = "m68k"))]
+    let better = step_rows(s, lo, hi, any_pixel, best);
+    // The band grows a row each way a step (a row more than the reach may span: no
+    // compares in the loop, docs/toolchain.md class 1).
+    s.lo = lo;
+    s.hi = hi;
+    s.next_lo = lo as usize;
+    s.next_hi = hi as usize;
+    better
+}
+
+/// [`step`]'s rows `lo ..= hi` (on the 68020 `__reflex_flood_step` in the runtime's
+/// assembly, which `the_reflex_images_escapes_match_the_host` holds to this code through
+/// the plans): the new reach, its new pixels in `next`, `grew`; nonzero when a new pixel
+/// has clearance `best + 1`.
+#[cfg(not(target_arch = "m68k"))]
+fn step_rows(s: &mut Scratch, lo: i32, hi: i32, any_pixel: u32, best: i32) -> u32 {
     // The level a new pixel must reach to beat `best`.
     let lvl = &s.free[(best + 1) as usize];
     let mut above = s.reach[lo as usize];
@@ -520,12 +569,6 @@ fn step(s: &mut Scratch, free_only: bool, best: i32) -> u32 {
         better |= layer & lvl[r];
         r += 1;
     }
-    // The band grows a row each way a step (a row more than the reach may span: no
-    // compares in the loop, docs/toolchain.md class 1).
-    s.lo = lo;
-    s.hi = hi;
-    s.next_lo = lo as usize;
-    s.next_hi = hi as usize;
     s.grew = grew;
     better
 }

@@ -369,6 +369,55 @@ __reflex_put_column:
     movem.l (%sp)+, %d2-%d5
     rts
 
+/* ---- a step of the escape's flood (crates/reflex, escape::step) ----
+ * u32 __reflex_flood_step(u32 *reach, u32 *next, const u32 *free0, const u32 *lvl, u32 n,
+ *                         u32 any, u32 *grew): over n >= 1 rows from the first, with reach
+ * pointing at the row above it (reach[0]) and the others at the first row: here = reach[1],
+ * d = here | here << 1 | here >> 1 | above | below (reach[2], not yet stepped), new reach
+ * here | (d & (free0 | any)), its new pixels (new ^ here) into next; above = the old here.
+ * Returns the or of the new pixels and lvl, *grew the or of the new pixels (the compiled
+ * loop spent ~200 cycles a row on spills and bounds checks). */
+    .section .text.__reflex_flood_step, "ax"
+    .globl __reflex_flood_step
+__reflex_flood_step:
+    movem.l %d2-%d7/%a2-%a3, -(%sp) /* 32 bytes: arguments from 36(%sp) */
+    movea.l 36(%sp), %a0            /* reach: the row above */
+    movea.l 40(%sp), %a1            /* next */
+    movea.l 44(%sp), %a2            /* free0 */
+    movea.l 48(%sp), %a3            /* lvl */
+    move.l  52(%sp), %d7
+    move.l  56(%sp), %d6            /* any */
+    moveq   #0, %d4                 /* grew */
+    moveq   #0, %d5                 /* better */
+    move.l  (%a0)+, %d0             /* above */
+    subq.l  #1, %d7
+1:  move.l  (%a0), %d1              /* here */
+    move.l  %d1, %d2
+    add.l   %d2, %d2
+    move.l  %d1, %d3
+    lsr.l   #1, %d3
+    or.l    %d3, %d2
+    or.l    %d1, %d2
+    or.l    %d0, %d2
+    or.l    4(%a0), %d2             /* below */
+    move.l  (%a2)+, %d3
+    or.l    %d6, %d3
+    and.l   %d3, %d2
+    or.l    %d1, %d2                /* the new reach */
+    move.l  %d2, (%a0)+
+    eor.l   %d1, %d2                /* its new pixels */
+    move.l  %d2, (%a1)+
+    or.l    %d2, %d4
+    and.l   (%a3)+, %d2
+    or.l    %d2, %d5
+    move.l  %d1, %d0                /* above: the old here */
+    dbra    %d7, 1b
+    movea.l 60(%sp), %a0
+    move.l  %d4, (%a0)
+    move.l  %d5, %d0
+    movem.l (%sp)+, %d2-%d7/%a2-%a3
+    rts
+
 /* ---- the reflex's known columns (crates/reflex, window::Known) ----
  * u32 __reflex_known_hits(const u32 *gens, const Known *k, u32 c, u32 n, u32 q, u32 m):
  * how many of columns c .. c + n (not wrapping), from c, k vouches for: the generation word
