@@ -449,6 +449,16 @@ impl FunctionCycles {
         self.name(self.slot(pc))
     }
 
+    /// The `top` costliest functions with short names ([`demangle_short`]), their cycles
+    /// and calls divided by `passes` (per pass of a profile over that many).
+    pub fn costliest(&self, top: usize, passes: f64) -> Vec<(String, f64, f64)> {
+        self.top_calls()
+            .into_iter()
+            .take(top)
+            .map(|(n, c, e)| (demangle_short(&n), c as f64 / passes, e as f64 / passes))
+            .collect()
+    }
+
     /// Adds `other`'s charges (to the same image's functions) to these.
     pub fn add(&mut self, other: &FunctionCycles) {
         for (a, b) in self.cycles.iter_mut().zip(&other.cycles) {

@@ -15,7 +15,7 @@
 //! * A free 3 rad move of link 1 with the reflex against the servo alone in the same plant
 //!   (native mode): the reflex must not slow the arm.
 
-use crate::boot::{demangle_short, FunctionCycles, System};
+use crate::boot::{FunctionCycles, System};
 use crate::sim::{Config, Sim};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -278,7 +278,7 @@ fn image_case(
                         // A pass ended (its heartbeat written): the longest so far keeps
                         // its profile (the first, begun before the timing, is not whole).
                         if periods > 0 && b.beats.max_cycles != max {
-                            worst_top = costliest(pass, top, 1.0);
+                            worst_top = pass.costliest(top, 1.0);
                         }
                         pass.clear();
                     }
@@ -339,18 +339,9 @@ fn image_case(
         over_1ms: beats.over_1ms,
         tests_per_pass: tests_sum / samples.max(1) as f64,
         known_per_pass: known_sum / samples.max(1) as f64,
-        top: per.map_or_else(Vec::new, |(per, _)| costliest(&per, top, passes as f64)),
+        top: per.map_or_else(Vec::new, |(per, _)| per.costliest(top, passes as f64)),
         worst_top,
     })
-}
-
-/// `f`'s `top` costliest functions with short names, cycles and calls divided by `passes`.
-fn costliest(f: &FunctionCycles, top: usize, passes: f64) -> Vec<(String, f64, f64)> {
-    f.top_calls()
-        .into_iter()
-        .take(top)
-        .map(|(n, c, e)| (demangle_short(&n), c as f64 / passes, e as f64 / passes))
-        .collect()
 }
 
 /// The obstacles (x, y, r in mm) of the cluttered case.

@@ -586,28 +586,16 @@ fn summarize(scenario: &Scenario, sim: &mut Sim, wall_s: f64, ex: Extrapolated) 
     });
     let long_passes = sim.long_passes().map(|(board, periods, l)| {
         let us = |c: u64| c as f64 * 1e6 / crate::emu::CPU_HZ as f64;
-        let top = |f: &crate::boot::FunctionCycles, per: u64| {
-            f.top_calls()
-                .into_iter()
-                .take(LONG_PASS_FUNCTIONS)
-                .map(|(n, c, e)| {
-                    let per = per.max(1) as f64;
-                    (
-                        crate::boot::demangle_short(&n),
-                        c as f64 / per,
-                        e as f64 / per,
-                    )
-                })
-                .collect()
-        };
         LongPassesSummary {
             board: board.name().into(),
             over_us: us(l.over_cycles),
             periods,
             passes: l.passes,
-            functions: top(&l.long, l.passes),
+            functions: l
+                .long
+                .costliest(LONG_PASS_FUNCTIONS, l.passes.max(1) as f64),
             longest_us: us(l.longest_cycles),
-            longest_functions: top(&l.longest, 1),
+            longest_functions: l.longest.costliest(LONG_PASS_FUNCTIONS, 1.0),
         }
     });
     let c = sim.collisions;
